@@ -1,0 +1,38 @@
+// Add-back of the multi-level exclusive scan of `sort::RadixSort`: after counts_scan.wgsl scanned
+// each BLOCK of `data` locally and the next level scanned the block totals `sums`, every element
+// of block b gets sums[b] added, which makes the scan of `data` global.
+// Blocks are linear workgroup indices over a 1D or 2D grid: wid.x + wid.y * num_workgroups.x.
+
+const PER_THREAD: u32 = 4u;
+const BLOCK: u32 = 1024u; // 256 invocations * PER_THREAD, as in counts_scan.wgsl
+
+struct ScanParams {
+    len: u32,
+    num_blocks: u32,
+    pad0: u32,
+    pad1: u32,
+}
+
+@group(0) @binding(0) var<uniform> params: ScanParams;
+@group(0) @binding(1) var<storage, read_write> data: array<u32>;
+@group(0) @binding(2) var<storage, read> sums: array<u32>;
+
+@compute @workgroup_size(256)
+fn main(
+    @builtin(local_invocation_index) lid: u32,
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+) {
+    let block = wid.x + wid.y * nwg.x;
+    if block >= params.num_blocks {
+        return;
+    }
+    let add = sums[block];
+    let base = block * BLOCK + lid * PER_THREAD;
+    for (var i = 0u; i < PER_THREAD; i++) {
+        let idx = base + i;
+        if idx < params.len {
+            data[idx] += add;
+        }
+    }
+}

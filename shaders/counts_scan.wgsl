@@ -1,0 +1,68 @@
+// Exclusive prefix sum, one level of the multi-level scan of `sort::RadixSort` (reduce-then-scan
+// step 2): each workgroup scans its block of BLOCK = 1024 u32s of `data` in place (4 per invocation,
+// then a Hillis-Steele scan of the 256 invocation totals in workgroup memory) and writes the block's
+// total to sums[block]. The caller scans `sums` the same way (the next level, its own dispatch) and
+// adds it back with counts_add.wgsl; a length of at most BLOCK needs this one dispatch only.
+// Blocks are linear workgroup indices over a 1D or 2D grid: wid.x + wid.y * num_workgroups.x.
+
+const WORKGROUP: u32 = 256u;
+const PER_THREAD: u32 = 4u;
+const BLOCK: u32 = 1024u; // WORKGROUP * PER_THREAD
+
+struct ScanParams {
+    len: u32,
+    num_blocks: u32,
+    pad0: u32,
+    pad1: u32,
+}
+
+@group(0) @binding(0) var<uniform> params: ScanParams;
+@group(0) @binding(1) var<storage, read_write> data: array<u32>;
+@group(0) @binding(2) var<storage, read_write> sums: array<u32>;
+
+var<workgroup> partial: array<u32, 256>;
+
+@compute @workgroup_size(256)
+fn main(
+    @builtin(local_invocation_index) lid: u32,
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+) {
+    let block = wid.x + wid.y * nwg.x;
+    if block >= params.num_blocks {
+        return;
+    }
+    let base = block * BLOCK + lid * PER_THREAD;
+    var v: array<u32, PER_THREAD>;
+    var total = 0u;
+    for (var i = 0u; i < PER_THREAD; i++) {
+        let idx = base + i;
+        var x = 0u;
+        if idx < params.len {
+            x = data[idx];
+        }
+        v[i] = total;
+        total += x;
+    }
+    partial[lid] = total;
+    workgroupBarrier();
+    for (var offset = 1u; offset < WORKGROUP; offset <<= 1u) {
+        var t = partial[lid];
+        if lid >= offset {
+            t += partial[lid - offset];
+        }
+        workgroupBarrier();
+        partial[lid] = t;
+        workgroupBarrier();
+    }
+    let before = partial[lid] - total;
+    for (var i = 0u; i < PER_THREAD; i++) {
+        let idx = base + i;
+        if idx < params.len {
+            data[idx] = before + v[i];
+        }
+    }
+    if lid == WORKGROUP - 1u {
+        sums[block] = partial[lid];
+    }
+}

@@ -1,0 +1,50 @@
+// 63-bit Morton keys (21 bits per axis) of triangle AABB centroids normalized to the scene's
+// centroid bounds (LBVH stage 2, Karras 2012 §4), and the identity permutation as sort values.
+// Keys are vec2<u32>(low 32 bits, high 32 bits); bit 3k+2 holds x's bit k, 3k+1 y's, 3k z's.
+#include "bvh_node.wgsl"
+#include "aabb.wgsl"
+
+struct MortonParams {
+    count: u32,
+    row_pitch: u32,
+    pad0: u32,
+    pad1: u32,
+}
+
+@group(0) @binding(0) var<uniform> params: MortonParams;
+@group(0) @binding(1) var<storage, read> triangles: array<Triangle>;
+// [0] holds the centroid bounds.
+@group(0) @binding(2) var<storage, read> centroid_bounds: array<Aabb>;
+@group(0) @binding(3) var<storage, read_write> keys: array<vec2<u32>>;
+@group(0) @binding(4) var<storage, read_write> values: array<u32>;
+
+const GRID: f32 = 2097152.0;
+const GRID_MAX: f32 = 2097151.0;
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x + gid.y * params.row_pitch;
+    if i >= params.count {
+        return;
+    }
+    let t = triangles[i];
+    let c = (triangle_min(t) + triangle_max(t)) * 0.5;
+    let bounds = centroid_bounds[0];
+    let extent = bounds.max - bounds.min;
+    let scale = select(vec3<f32>(0.0), vec3<f32>(GRID) / extent, extent > vec3<f32>(0.0));
+    let q = vec3<u32>(clamp((c - bounds.min) * scale, vec3<f32>(0.0), vec3<f32>(GRID_MAX)));
+    var key = vec2<u32>(0u);
+    for (var bit = 0u; bit < 21u; bit++) {
+        for (var axis = 0u; axis < 3u; axis++) {
+            let position = 3u * bit + 2u - axis;
+            let value = (q[axis] >> bit) & 1u;
+            if position < 32u {
+                key.x |= value << position;
+            } else {
+                key.y |= value << (position - 32u);
+            }
+        }
+    }
+    keys[i] = key;
+    values[i] = i;
+}

@@ -1,0 +1,26 @@
+//! The crate's error type: every failure caused by user input ends up here with a readable message.
+
+use std::path::PathBuf;
+
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    #[error("cannot read {path}: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("malformed OBJ file {path}: {message}")]
+    Obj { path: PathBuf, message: String },
+    #[error("scene '{0}' has no usable triangles")]
+    EmptyScene(String),
+    #[error("unknown scene '{name}': not a built-in scene name ({known}) and no such file")]
+    UnknownScene { name: String, known: String },
+    #[error("scene too large for this device: {0}")]
+    SceneTooLarge(String),
+    #[error("GPU error: {0}")]
+    Gpu(String),
+    #[error("invalid argument: {0}")]
+    InvalidArgument(String),
+}
+
+pub type Result<T> = std::result::Result<T, Error>;

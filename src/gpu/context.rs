@@ -1,0 +1,139 @@
+//! Device creation: adapter selection (discrete GPU first, or one picked by name), explicit
+//! features and limits, and a one-line description of what was chosen.
+
+use crate::{Error, Result};
+
+/// How to choose the adapter.
+#[derive(Clone, Debug, Default)]
+pub struct GpuOptions {
+    /// Case-insensitive substring of the adapter name to use (also read from `TREELET_ADAPTER`).
+    pub adapter: Option<String>,
+}
+
+/// An open device with what the rest of the crate needs to know about it.
+pub struct GpuContext {
+    pub instance: wgpu::Instance,
+    pub adapter: wgpu::Adapter,
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub info: wgpu::AdapterInfo,
+    /// Timestamp queries are available (otherwise timings read "n/a").
+    pub timestamps: bool,
+}
+
+/// Preference order of adapter types: discrete GPUs first, software rasterizers last.
+fn type_rank(t: wgpu::DeviceType) -> u32 {
+    match t {
+        wgpu::DeviceType::DiscreteGpu => 0,
+        wgpu::DeviceType::IntegratedGpu => 1,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Other => 3,
+        wgpu::DeviceType::Cpu => 4,
+    }
+}
+
+impl GpuContext {
+    /// Opens a device without a window (headless rendering, benchmarks, tests).
+    pub fn new(options: &GpuOptions) -> Result<Self> {
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        Self::with_instance(instance, options, None)
+    }
+
+    /// Opens a device on `instance`, able to present to `surface` when given.
+    pub fn with_instance(
+        instance: wgpu::Instance,
+        options: &GpuOptions,
+        surface: Option<&wgpu::Surface<'_>>,
+    ) -> Result<Self> {
+        let adapter = pollster::block_on(Self::select_adapter(&instance, options, surface))?;
+        let info = adapter.get_info();
+        let wanted = wgpu::Features::TIMESTAMP_QUERY
+            | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS
+            | wgpu::Features::SUBGROUP;
+        let features = adapter.features() & wanted;
+        let required_limits = adapter.limits();
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("treelet"),
+            required_features: features,
+            required_limits,
+            experimental_features: wgpu::ExperimentalFeatures::disabled(),
+            memory_hints: wgpu::MemoryHints::Performance,
+            trace: wgpu::Trace::Off,
+        }))
+        .map_err(|e| Error::Gpu(format!("cannot open device on {}: {e}", info.name)))?;
+        log::info!(
+            "adapter: {} ({:?}, {:?}), driver {} {}",
+            info.name,
+            info.device_type,
+            info.backend,
+            info.driver,
+            info.driver_info
+        );
+        Ok(Self {
+            instance,
+            adapter,
+            device,
+            queue,
+            timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY),
+            info,
+        })
+    }
+
+    async fn select_adapter(
+        instance: &wgpu::Instance,
+        options: &GpuOptions,
+        surface: Option<&wgpu::Surface<'_>>,
+    ) -> Result<wgpu::Adapter> {
+        let wanted_name = options
+            .adapter
+            .clone()
+            .or_else(|| std::env::var("TREELET_ADAPTER").ok())
+            .map(|s| s.to_lowercase());
+        let mut adapters: Vec<wgpu::Adapter> = instance
+            .enumerate_adapters(wgpu::Backends::all())
+            .await
+            .into_iter()
+            .filter(|a| surface.is_none_or(|s| a.is_surface_supported(s)))
+            .collect();
+        if adapters.is_empty() {
+            return Err(Error::Gpu(
+                "no GPU adapter found: install a Vulkan driver (on Debian/Ubuntu run scripts/install-deps.sh, which installs Mesa's software driver)".into(),
+            ));
+        }
+        let names: Vec<String> = adapters.iter().map(|a| a.get_info().name).collect();
+        if let Some(wanted) = wanted_name {
+            return adapters
+                .into_iter()
+                .find(|a| a.get_info().name.to_lowercase().contains(&wanted))
+                .ok_or_else(|| {
+                    Error::Gpu(format!(
+                        "no adapter matches '{wanted}'; available: {}",
+                        names.join(", ")
+                    ))
+                });
+        }
+        adapters.sort_by_key(|a| {
+            let info = a.get_info();
+            // Vulkan before other backends on the same device: it is what the project is tested on.
+            (
+                type_rank(info.device_type),
+                info.backend != wgpu::Backend::Vulkan,
+            )
+        });
+        Ok(adapters.swap_remove(0))
+    }
+
+    /// "name (backend, driver)" for logs, JSON and the viewer.
+    pub fn adapter_description(&self) -> String {
+        format!(
+            "{} ({:?}, {} {})",
+            self.info.name, self.info.backend, self.info.driver, self.info.driver_info
+        )
+    }
+
+    /// Largest storage buffer binding this device accepts, in bytes.
+    pub fn max_storage_binding(&self) -> u64 {
+        self.device.limits().max_storage_buffer_binding_size
+    }
+}

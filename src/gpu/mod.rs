@@ -1,0 +1,15 @@
+//! GPU plumbing: device and adapter selection (`context`), storage buffers and read-back
+//! (`buffers`), WGSL sources with includes and pipeline creation (`shaders`), and timestamp-query
+//! timing (`timer`).
+
+mod buffers;
+mod context;
+mod shaders;
+mod timer;
+
+pub use buffers::{
+    bind_entry, dispatch_grid, read_buffer, storage_buffer, storage_buffer_zeroed, uniform_buffer,
+};
+pub use context::{GpuContext, GpuOptions};
+pub use shaders::{compute_pipeline, shader_source, KERNELS};
+pub use timer::{GpuTimer, StageTime};

@@ -1,0 +1,124 @@
+//! WGSL sources, embedded at compile time. Kernels live in `shaders/<data>_<op>.wgsl`, shared code in
+//! `shaders/include/*.wgsl`, pulled in by `#include "name.wgsl"` lines (each file once).
+
+use super::GpuContext;
+
+/// Shared include files: (file name, source).
+const INCLUDES: &[(&str, &str)] = &[
+    (
+        "bvh_node.wgsl",
+        include_str!("../../shaders/include/bvh_node.wgsl"),
+    ),
+    (
+        "bvh_traverse.wgsl",
+        include_str!("../../shaders/include/bvh_traverse.wgsl"),
+    ),
+    (
+        "ray_triangle.wgsl",
+        include_str!("../../shaders/include/ray_triangle.wgsl"),
+    ),
+    (
+        "random.wgsl",
+        include_str!("../../shaders/include/random.wgsl"),
+    ),
+    ("aabb.wgsl", include_str!("../../shaders/include/aabb.wgsl")),
+];
+
+/// Every compute kernel: (file name, source before include expansion).
+pub const KERNELS: &[(&str, &str)] = &[
+    (
+        "keys_histogram.wgsl",
+        include_str!("../../shaders/keys_histogram.wgsl"),
+    ),
+    (
+        "counts_scan.wgsl",
+        include_str!("../../shaders/counts_scan.wgsl"),
+    ),
+    (
+        "counts_add.wgsl",
+        include_str!("../../shaders/counts_add.wgsl"),
+    ),
+    (
+        "keys_scatter.wgsl",
+        include_str!("../../shaders/keys_scatter.wgsl"),
+    ),
+    (
+        "centroids_reduce.wgsl",
+        include_str!("../../shaders/centroids_reduce.wgsl"),
+    ),
+    (
+        "morton_compute.wgsl",
+        include_str!("../../shaders/morton_compute.wgsl"),
+    ),
+    (
+        "lbvh_hierarchy.wgsl",
+        include_str!("../../shaders/lbvh_hierarchy.wgsl"),
+    ),
+    (
+        "bounds_refit.wgsl",
+        include_str!("../../shaders/bounds_refit.wgsl"),
+    ),
+    (
+        "rays_intersect.wgsl",
+        include_str!("../../shaders/rays_intersect.wgsl"),
+    ),
+    (
+        "paths_trace.wgsl",
+        include_str!("../../shaders/paths_trace.wgsl"),
+    ),
+    (
+        "image_tonemap.wgsl",
+        include_str!("../../shaders/image_tonemap.wgsl"),
+    ),
+];
+
+/// Full source of kernel `name` with its includes expanded. Panics on an unknown name: the set of
+/// kernels is fixed at compile time, so that is a programming error.
+pub fn shader_source(name: &str) -> String {
+    let (_, source) = KERNELS
+        .iter()
+        .find(|(n, _)| *n == name)
+        .unwrap_or_else(|| panic!("unknown kernel {name}"));
+    let mut included = Vec::new();
+    expand(source, &mut included)
+}
+
+fn expand(source: &str, included: &mut Vec<&'static str>) -> String {
+    let mut out = String::with_capacity(source.len());
+    for line in source.lines() {
+        if let Some(rest) = line.trim().strip_prefix("#include") {
+            let file = rest.trim().trim_matches('"');
+            let (name, text) = INCLUDES
+                .iter()
+                .find(|(n, _)| *n == file)
+                .unwrap_or_else(|| panic!("unknown include {file}"));
+            if !included.contains(name) {
+                included.push(name);
+                out.push_str(&expand(text, included));
+            }
+        } else {
+            out.push_str(line);
+            out.push('\n');
+        }
+    }
+    out
+}
+
+/// A compute pipeline for `entry` of kernel `name`, with its bind group layout derived from the shader.
+pub fn compute_pipeline(ctx: &GpuContext, name: &str, entry: &str) -> wgpu::ComputePipeline {
+    let module = ctx
+        .device
+        .create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(name),
+            source: wgpu::ShaderSource::Wgsl(shader_source(name).into()),
+        });
+    ctx.device
+        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(name),
+            layout: None,
+            module: &module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            cache: None,
+        })
+}

@@ -1,0 +1,17 @@
+//! treelet: per-frame GPU BVH construction after Karras & Aila, "Fast Parallel Construction of
+//! High-Quality Bounding Volume Hierarchies" (HPG 2013), and a wgpu compute path tracer.
+//!
+//! Layout: `geometry` (boxes, rays, triangle tests), `scene` (OBJ, procedural scenes, registry),
+//! `bvh` (node layout, CPU reference builders, SAH, validation), `gpu` (device, timing, shaders),
+//! `trace` (camera, GPU path tracer and closest-hit queries).
+
+pub mod bvh;
+pub mod error;
+pub mod geometry;
+pub mod gpu;
+
+pub mod scene;
+pub mod sort;
+pub mod trace;
+
+pub use error::{Error, Result};

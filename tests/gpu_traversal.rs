@@ -1,0 +1,66 @@
+//! GPU closest-hit traversal through CPU-built trees equals CPU brute force, for rays of every
+//! kind (inside boxes, aimed, through edges and vertices, along edges, misses, short intervals)
+//! on several scenes.
+
+mod common;
+
+use common::{assert_hits_match, gpu, random_soup, test_rays};
+use treelet::bvh::{build_sweep_sah, validate, SahParams};
+use treelet::scene::{load_scene, Material, Scene, Triangle};
+use treelet::trace::{closest_hits, GpuScene};
+
+fn scene_of(triangles: Vec<Triangle>) -> Scene {
+    let bounds = triangles
+        .iter()
+        .fold(treelet::geometry::Aabb::EMPTY, |b, t| b.union(t.bounds()));
+    Scene {
+        name: "test".into(),
+        triangles,
+        materials: vec![Material::diffuse(glam::Vec3::splat(0.5))],
+        camera: treelet::scene::Camera::framing(&bounds),
+        sky: glam::Vec3::ONE,
+    }
+}
+
+fn check_scene(scene: &Scene, per_kind: usize, seed: u64) {
+    let bvh = build_sweep_sah(&scene.triangles, &SahParams::default());
+    validate(&bvh, &scene.triangles).expect("sweep tree is valid");
+    let gpu_scene = GpuScene::upload(gpu(), scene, &bvh).unwrap();
+    let rays = test_rays(&scene.triangles, per_kind, seed);
+    let plain: Vec<_> = rays.iter().map(|(_, r)| *r).collect();
+    let hits = closest_hits(gpu(), &gpu_scene, &plain).unwrap();
+    let tolerated = assert_hits_match(&scene.triangles, &rays, &hits);
+    println!(
+        "{}: {} rays, {tolerated} tolerated edge disagreements",
+        scene.name,
+        rays.len()
+    );
+}
+
+#[test]
+fn random_soup_hits_equal_brute_force() {
+    check_scene(&scene_of(random_soup(3000, 7)), 500, 1);
+}
+
+#[test]
+fn cornell_hits_equal_brute_force() {
+    check_scene(&load_scene("cornell").unwrap(), 400, 2);
+}
+
+#[test]
+fn field_hits_equal_brute_force() {
+    check_scene(&load_scene("field-10k").unwrap(), 400, 3);
+}
+
+#[test]
+fn shared_buddha_hits_equal_brute_force() {
+    match load_scene("buddha") {
+        Ok(scene) => check_scene(&scene, 300, 4),
+        Err(e) => println!("skipping: shared scenes not available ({e})"),
+    }
+}
+
+#[test]
+fn single_triangle_scene() {
+    check_scene(&scene_of(random_soup(1, 9)), 100, 5);
+}

@@ -1,0 +1,213 @@
+//! The GPU radix sort (`sort::RadixSort`) and its CPU twin against `sort_unstable` on
+//! (key, value) pairs with values 0..n: equal results mean sorted by key and stable.
+
+mod common;
+
+use common::{gpu, rng};
+use rand::Rng;
+use treelet::sort::{sort_pairs_cpu, RadixSort, TILE_SIZE};
+
+fn split(key: u64) -> [u32; 2] {
+    [key as u32, (key >> 32) as u32]
+}
+
+fn join(key: [u32; 2]) -> u64 {
+    u64::from(key[0]) | (u64::from(key[1]) << 32)
+}
+
+/// Keys below 2^key_bits.
+fn random_keys(n: usize, key_bits: u32, seed: u64) -> Vec<u64> {
+    let mut r = rng(seed);
+    let mask = u64::MAX >> (64 - key_bits);
+    (0..n).map(|_| r.random::<u64>() & mask).collect()
+}
+
+/// Expected result: pairs (key, index) sorted by (key & mask, index), i.e. stably by masked key.
+fn expected(keys: &[u64], key_bits: u32) -> (Vec<u64>, Vec<u32>) {
+    let mask = u64::MAX >> (64 - key_bits);
+    let mut pairs: Vec<(u64, u32, u64)> = keys
+        .iter()
+        .enumerate()
+        .map(|(i, &k)| (k & mask, i as u32, k))
+        .collect();
+    pairs.sort_unstable();
+    pairs.into_iter().map(|(_, v, k)| (k, v)).unzip()
+}
+
+/// Sorts with the GPU and the CPU twin and compares both with `expected`.
+fn check(sorter: &mut RadixSort, keys: &[u64], key_bits: u32) {
+    let values: Vec<u32> = (0..keys.len() as u32).collect();
+    let (want_keys, want_values) = expected(keys, key_bits);
+    let (cpu_keys, cpu_values) = sort_pairs_cpu(keys, &values, key_bits);
+    assert!(
+        cpu_keys == want_keys && cpu_values == want_values,
+        "CPU twin, n = {}",
+        keys.len()
+    );
+    let gpu_keys: Vec<[u32; 2]> = keys.iter().map(|&k| split(k)).collect();
+    let (got_keys, got_values) = sorter
+        .sort_pairs(gpu(), &gpu_keys, &values, key_bits)
+        .unwrap();
+    let got_keys: Vec<u64> = got_keys.into_iter().map(join).collect();
+    if let Some(i) =
+        (0..keys.len()).find(|&i| got_keys[i] != want_keys[i] || got_values[i] != want_values[i])
+    {
+        panic!(
+            "GPU sort of n = {} with key_bits = {key_bits}: first difference at {i}: ({:#x}, {}) instead of ({:#x}, {})",
+            keys.len(),
+            got_keys[i],
+            got_values[i],
+            want_keys[i],
+            want_values[i]
+        );
+    }
+}
+
+#[test]
+fn lengths_around_tiles_and_blocks() {
+    let mut sorter = RadixSort::new(gpu());
+    for (i, n) in [
+        0, 1, 2, 255, 256, 257, 1000, 2047, 2048, 2049, 4097, 100_000,
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        check(&mut sorter, &random_keys(n, 63, 10 + i as u64), 63);
+    }
+}
+
+#[test]
+fn two_dimensional_grids() {
+    // Capped at 8 workgroups per dimension, 100,000 pairs need 49 tiles (a 7x7 grid) and 13 scan
+    // blocks (a 7x2 grid, one workgroup idle), and 16,385 pairs 9 tiles (5x2, one idle): the path
+    // that more than 65,535 * TILE_SIZE pairs take under a real device limit.
+    let mut sorter = RadixSort::new(gpu()).with_max_workgroups_per_dimension(8);
+    let n = 100_000;
+    assert!(n > 8 * TILE_SIZE as usize);
+    check(&mut sorter, &random_keys(n, 40, 20), 40);
+    check(
+        &mut sorter,
+        &random_keys(8 * TILE_SIZE as usize + 1, 17, 21),
+        17,
+    );
+}
+
+#[test]
+fn duplicate_keys() {
+    let mut sorter = RadixSort::new(gpu());
+    let mut r = rng(30);
+    let distinct: Vec<u64> = (0..16).map(|_| r.random()).collect();
+    let keys: Vec<u64> = (0..50_000)
+        .map(|_| distinct[r.random_range(0..16)])
+        .collect();
+    check(&mut sorter, &keys, 64);
+    check(&mut sorter, &vec![0x1234_5678_9abc_def0; 10_000], 64);
+    check(&mut sorter, &vec![0; 5000], 63);
+    check(&mut sorter, &vec![u64::MAX; 5000], 64);
+}
+
+#[test]
+fn key_widths() {
+    let mut sorter = RadixSort::new(gpu());
+    check(&mut sorter, &random_keys(30_000, 64, 40), 64);
+    check(&mut sorter, &random_keys(30_000, 30, 41), 30);
+    // Odd pass counts (the input is copied to the scratch buffers first) and sub-byte digits.
+    check(&mut sorter, &random_keys(30_000, 1, 42), 1);
+    check(&mut sorter, &random_keys(30_000, 20, 43), 20);
+    // Bits above key_bits are ignored (stably): 64-bit keys sorted by their low 30 and 8 bits.
+    check(&mut sorter, &random_keys(30_000, 64, 44), 30);
+    check(&mut sorter, &random_keys(30_000, 64, 45), 8);
+}
+
+#[test]
+fn scratch_reuse_and_growth() {
+    let mut sorter = RadixSort::new(gpu());
+    check(&mut sorter, &random_keys(50_000, 63, 50), 63);
+    check(&mut sorter, &random_keys(50_000, 63, 51), 63);
+    check(&mut sorter, &random_keys(3000, 63, 52), 63);
+    check(&mut sorter, &random_keys(70_000, 63, 53), 63);
+}
+
+#[test]
+fn two_sorts_in_one_submission() {
+    let ctx = gpu();
+    let mut sorter = RadixSort::new(ctx);
+    let a = random_keys(20_000, 63, 60);
+    let b = random_keys(30_000, 24, 61);
+    let upload = |keys: &[u64]| {
+        let split_keys: Vec<[u32; 2]> = keys.iter().map(|&k| split(k)).collect();
+        let values: Vec<u32> = (0..keys.len() as u32).collect();
+        (
+            treelet::gpu::storage_buffer(ctx, "keys", &split_keys).unwrap(),
+            treelet::gpu::storage_buffer(ctx, "values", &values).unwrap(),
+        )
+    };
+    let (ka, va) = upload(&a);
+    let (kb, vb) = upload(&b);
+    let mut timer = treelet::gpu::GpuTimer::new(ctx, 2);
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    sorter
+        .sort(
+            ctx,
+            &mut encoder,
+            &ka,
+            &va,
+            a.len() as u32,
+            63,
+            Some(&mut timer),
+        )
+        .unwrap();
+    sorter
+        .sort(
+            ctx,
+            &mut encoder,
+            &kb,
+            &vb,
+            b.len() as u32,
+            24,
+            Some(&mut timer),
+        )
+        .unwrap();
+    timer.resolve(&mut encoder);
+    ctx.queue.submit([encoder.finish()]);
+    for (keys, kbuf, vbuf, bits) in [(&a, &ka, &va, 63), (&b, &kb, &vb, 24)] {
+        let got_keys: Vec<[u32; 2]> = treelet::gpu::read_buffer(ctx, kbuf, keys.len()).unwrap();
+        let got_values: Vec<u32> = treelet::gpu::read_buffer(ctx, vbuf, keys.len()).unwrap();
+        let got_keys: Vec<u64> = got_keys.into_iter().map(join).collect();
+        assert!(
+            (got_keys, got_values) == expected(keys, bits),
+            "sort of {} pairs",
+            keys.len()
+        );
+    }
+    let times = timer.read(ctx).unwrap();
+    assert_eq!(
+        times.iter().map(|t| t.label.as_str()).collect::<Vec<_>>(),
+        ["sort", "sort"]
+    );
+}
+
+#[test]
+fn invalid_arguments_are_errors() {
+    let ctx = gpu();
+    let mut sorter = RadixSort::new(ctx);
+    assert!(sorter.sort_pairs(ctx, &[[0, 0]], &[0], 0).is_err());
+    assert!(sorter.sort_pairs(ctx, &[[0, 0]], &[0], 65).is_err());
+    assert!(sorter.sort_pairs(ctx, &[[0, 0]], &[0, 1], 8).is_err());
+}
+
+#[test]
+fn cpu_twin_matches_sort_unstable() {
+    for (n, bits, seed) in [
+        (0, 64, 70),
+        (1, 64, 71),
+        (1000, 64, 72),
+        (100_000, 63, 73),
+        (10_000, 30, 74),
+        (5000, 3, 75),
+    ] {
+        let keys = random_keys(n, bits, seed);
+        let values: Vec<u32> = (0..n as u32).collect();
+        assert_eq!(sort_pairs_cpu(&keys, &values, bits), expected(&keys, bits));
+    }
+}
