@@ -25,6 +25,7 @@ lavapipe_ok() {
 need_pkgs=()
 dpkg -s libvulkan1 >/dev/null 2>&1 || need_pkgs+=(libvulkan1)
 dpkg -s xvfb >/dev/null 2>&1 || need_pkgs+=(xvfb)
+dpkg -s libxkbcommon-x11-0 >/dev/null 2>&1 || need_pkgs+=(libxkbcommon-x11-0)
 dpkg -s vulkan-tools >/dev/null 2>&1 || need_pkgs+=(vulkan-tools)
 
 if [ ${#need_pkgs[@]} -gt 0 ] || { ! have_gpu_vulkan && ! lavapipe_ok; }; then

@@ -12,3 +12,4 @@ rustup component add rustfmt clippy >/dev/null 2>&1 || true
 cargo fmt --check
 cargo clippy --release --all-targets -- -D warnings
 cargo test --release
+bash scripts/viewer-smoke.sh

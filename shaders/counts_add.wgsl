@@ -3,8 +3,7 @@
 // of block b gets sums[b] added, which makes the scan of `data` global.
 // Blocks are linear workgroup indices over a 1D or 2D grid: wid.x + wid.y * num_workgroups.x.
 
-const PER_THREAD: u32 = 4u;
-const BLOCK: u32 = 1024u; // 256 invocations * PER_THREAD, as in counts_scan.wgsl
+const BLOCK: u32 = 1024u; // 256 invocations * 4, as in counts_scan.wgsl
 
 struct ScanParams {
     len: u32,
@@ -28,11 +27,10 @@ fn main(
         return;
     }
     let add = sums[block];
-    let base = block * BLOCK + lid * PER_THREAD;
-    for (var i = 0u; i < PER_THREAD; i++) {
-        let idx = base + i;
-        if idx < params.len {
-            data[idx] += add;
+    let base = block * BLOCK + lid * 4u;
+    for (var i = 0u; i < 4u; i++) {
+        if base + i < params.len {
+            data[base + i] += add;
         }
     }
 }

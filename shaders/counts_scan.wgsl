@@ -1,13 +1,13 @@
 // Exclusive prefix sum, one level of the multi-level scan of `sort::RadixSort` (reduce-then-scan
-// step 2): each workgroup scans its block of BLOCK = 1024 u32s of `data` in place (4 per invocation,
-// then a Hillis-Steele scan of the 256 invocation totals in workgroup memory) and writes the block's
-// total to sums[block]. The caller scans `sums` the same way (the next level, its own dispatch) and
-// adds it back with counts_add.wgsl; a length of at most BLOCK needs this one dispatch only.
+// step 2): each workgroup scans its block of BLOCK = 1024 u32s of `data` in place (4 consecutive
+// per invocation, then a Hillis-Steele scan of the 256 invocation totals in workgroup memory) and
+// writes the block's total to sums[block]. The caller scans `sums` the same way (the next level,
+// its own dispatch) and adds it back with counts_add.wgsl; a length of at most BLOCK needs this
+// one dispatch only.
 // Blocks are linear workgroup indices over a 1D or 2D grid: wid.x + wid.y * num_workgroups.x.
 
 const WORKGROUP: u32 = 256u;
-const PER_THREAD: u32 = 4u;
-const BLOCK: u32 = 1024u; // WORKGROUP * PER_THREAD
+const BLOCK: u32 = 1024u; // WORKGROUP * 4
 
 struct ScanParams {
     len: u32,
@@ -22,6 +22,19 @@ struct ScanParams {
 
 var<workgroup> partial: array<u32, 256>;
 
+fn load(i: u32) -> u32 {
+    if i < params.len {
+        return data[i];
+    }
+    return 0u;
+}
+
+fn store(i: u32, x: u32) {
+    if i < params.len {
+        data[i] = x;
+    }
+}
+
 @compute @workgroup_size(256)
 fn main(
     @builtin(local_invocation_index) lid: u32,
@@ -32,18 +45,9 @@ fn main(
     if block >= params.num_blocks {
         return;
     }
-    let base = block * BLOCK + lid * PER_THREAD;
-    var v: array<u32, PER_THREAD>;
-    var total = 0u;
-    for (var i = 0u; i < PER_THREAD; i++) {
-        let idx = base + i;
-        var x = 0u;
-        if idx < params.len {
-            x = data[idx];
-        }
-        v[i] = total;
-        total += x;
-    }
+    let base = block * BLOCK + lid * 4u;
+    let x = vec4<u32>(load(base), load(base + 1u), load(base + 2u), load(base + 3u));
+    let total = x.x + x.y + x.z + x.w;
     partial[lid] = total;
     workgroupBarrier();
     for (var offset = 1u; offset < WORKGROUP; offset <<= 1u) {
@@ -56,12 +60,10 @@ fn main(
         workgroupBarrier();
     }
     let before = partial[lid] - total;
-    for (var i = 0u; i < PER_THREAD; i++) {
-        let idx = base + i;
-        if idx < params.len {
-            data[idx] = before + v[i];
-        }
-    }
+    store(base, before);
+    store(base + 1u, before + x.x);
+    store(base + 2u, before + x.x + x.y);
+    store(base + 3u, before + x.x + x.y + x.z);
     if lid == WORKGROUP - 1u {
         sums[block] = partial[lid];
     }

@@ -1,28 +1,23 @@
-// Radix-sort stable scatter (one LSD pass of `sort::RadixSort`, reduce-then-scan step 3): each
-// workgroup ranks its tile of TILE (key, value) pairs by the 8-bit digit at `params.shift` (low
-// `params.bits` bits) stably and writes each pair to offsets[digit * num_tiles + tile] + rank, where
+// Radix-sort stable scatter, step 3 of each LSD pass of `sort::RadixSort` (reduce-then-scan): each
+// workgroup ranks its tile of TILE (key, value) pairs stably by the 4-bit digit at `params.shift`
+// (low `params.bits` bits) and writes each pair to offsets[digit * num_tiles + tile] + rank, where
 // `offsets` is the exclusive scan of the keys_histogram.wgsl counts.
 //
-// Stable ranking without subgroup operations: "match"-style multisplit ranking (as in CUB's
-// BlockRadixRankMatch and Onesweep, Adinets & Merrill 2022) with subgroup ballots emulated in
-// workgroup memory. The 256 invocations form 8 virtual warps of 32 lanes; warp w owns the
-// contiguous slice [w * 256, (w + 1) * 256) of the tile and walks it in 8 rounds of 32 pairs.
-// In each round every lane moves its bit in peers[warp][digit] from last round's digit to this
-// round's (atomicAnd/atomicOr), so after a barrier peers[warp][digit] is the set of lanes holding
-// that digit; the lane's rank within its warp is the count of that digit in earlier rounds plus the
-// lower peers, and the highest peer adds the round's count. After the last round the per-warp
-// counts are turned into exclusive prefixes over warps. Order of ranks = (warp, round, lane) =
-// element order, hence stable. Two barriers per round; 13 KiB of workgroup memory.
+// Stable ranking by per-invocation counting (the radix sort of Zagha & Blelloch 1991 for vector
+// multiprocessors, one "processor" per invocation): invocation i owns the contiguous pairs
+// [i * ITEMS, (i + 1) * ITEMS) of the tile. (1) It counts its digits in 16 byte-wide counters
+// packed in a vec4 (one-hot adds, all vector ALU, no atomics); (2) the 16 x 256 counts, widened to
+// 16-bit halves in workgroup memory, get an exclusive scan over invocations per digit (raking:
+// segments of 8 invocations, then the 32 segment sums; 3 barriers in all); (3) it walks its pairs
+// again and writes each to offset(digit, tile) + prefix(digit, invocation) + the count of that digit
+// earlier in its own run. Ranks follow (invocation, position) = element order, hence stable.
+// 9 KiB of workgroup memory; no subgroup operations.
 // Tiles are linear workgroup indices over a 1D or 2D grid: wid.x + wid.y * num_workgroups.x.
-// TILE, SortParams and digit_of must match keys_histogram.wgsl and src/sort/radix_sort.rs.
+// ITEMS, TILE, SortParams and digit_of must match keys_histogram.wgsl and src/sort/radix_sort.rs.
 
 const WORKGROUP: u32 = 256u;
-const RADIX: u32 = 256u;
-const LANES: u32 = 32u; // lanes of a virtual warp = bits of a peers mask
-const ROUNDS: u32 = 8u;
-const WARP_ITEMS: u32 = 256u; // LANES * ROUNDS pairs per virtual warp
-const TILE: u32 = 2048u; // WORKGROUP * ROUNDS pairs per workgroup
-const NONE: u32 = 0xffffffffu;
+const ITEMS: u32 = 32u; // pairs per invocation, at most 255 (byte-wide counters)
+const TILE: u32 = 8192u; // WORKGROUP * ITEMS pairs per workgroup, below 2^16 (16-bit prefixes)
 
 struct SortParams {
     n: u32,
@@ -38,17 +33,37 @@ struct SortParams {
 @group(0) @binding(4) var<storage, read_write> keys_out: array<vec2<u32>>;
 @group(0) @binding(5) var<storage, read_write> values_out: array<u32>;
 
-// [warp][digit]: bit l set when lane l of the warp holds that digit in the current round.
-var<workgroup> peers: array<atomic<u32>, 2048>;
-// [warp / 2][digit], warp parity selects the 16-bit half: pairs of that digit the warp has ranked;
-// after the last round, the tile-local exclusive prefix over warps instead.
-var<workgroup> warp_counts: array<atomic<u32>, 1024>;
-// First output position of each digit for this tile.
-var<workgroup> digit_base: array<u32, 256>;
+// [w][invocation]: counts, then exclusive prefixes within the segment, of digits 2w (low 16 bits)
+// and 2w + 1 (high 16 bits).
+var<workgroup> prefix: array<u32, 2048>;
+// [w][segment]: sums, then exclusive prefixes, over the 32 segments of 8 invocations.
+var<workgroup> segments: array<u32, 256>;
 
 fn digit_of(key: vec2<u32>) -> u32 {
     let word = select(key.x, key.y, params.shift >= 32u);
     return (word >> (params.shift & 31u)) & ((1u << params.bits) - 1u);
+}
+
+// One in byte (d % 4) of component d / 4: adding it counts digit d in 16 byte-wide counters.
+fn one_hot(d: u32) -> vec4<u32> {
+    return select(vec4<u32>(0u), vec4<u32>(1u << ((d & 3u) * 8u)), vec4<u32>(d >> 2u) == vec4<u32>(0u, 1u, 2u, 3u));
+}
+
+// Bytes 0 and 1 of `f` to the two 16-bit halves.
+fn widen(f: u32) -> u32 {
+    return (f & 0xffu) | ((f & 0xff00u) << 8u);
+}
+
+// Component i of v, with selects (dynamic indexing is slow on some drivers).
+fn pick(v: vec4<u32>, i: u32) -> u32 {
+    return select(select(v.x, v.y, i == 1u), select(v.z, v.w, i == 3u), i >= 2u);
+}
+
+// First output position of digit d for invocation lid's pairs.
+fn first_slot(d: u32, lid: u32, tile: u32) -> u32 {
+    let w = d >> 1u;
+    let local = prefix[w * WORKGROUP + lid] + segments[w * 32u + lid / 8u];
+    return offsets[d * params.num_tiles + tile] + ((local >> ((d & 1u) * 16u)) & 0xffffu);
 }
 
 @compute @workgroup_size(256)
@@ -61,71 +76,59 @@ fn main(
     if tile >= params.num_tiles {
         return;
     }
-    for (var i = 0u; i < 8u; i++) {
-        atomicStore(&peers[i * RADIX + lid], 0u);
-    }
-    for (var i = 0u; i < 4u; i++) {
-        atomicStore(&warp_counts[i * RADIX + lid], 0u);
-    }
-    digit_base[lid] = offsets[lid * params.num_tiles + tile];
-    workgroupBarrier();
-
-    let warp = lid / LANES;
-    let lane = lid % LANES;
-    let lane_bit = 1u << lane;
-    let peers_row = warp * RADIX;
-    let count_row = (warp >> 1u) * RADIX;
-    let count_shift = (warp & 1u) * 16u;
-    let first = tile * TILE + warp * WARP_ITEMS + lane;
-    var ranks: array<u32, ROUNDS>;
-    var prev = NONE;
-    for (var r = 0u; r < ROUNDS; r++) {
-        let item = first + r * LANES;
-        var digit = NONE;
+    let first = tile * TILE + lid * ITEMS;
+    var count = vec4<u32>(0u);
+    for (var i = 0u; i < ITEMS; i++) {
+        let item = first + i;
         if item < params.n {
-            digit = digit_of(keys_in[item]);
+            count += one_hot(digit_of(keys_in[item]));
         }
-        if digit != prev {
-            if prev != NONE {
-                atomicAnd(&peers[peers_row + prev], ~lane_bit);
-            }
-            if digit != NONE {
-                atomicOr(&peers[peers_row + digit], lane_bit);
-            }
-        }
-        workgroupBarrier();
-        var mask = 0u;
-        if digit != NONE {
-            mask = atomicLoad(&peers[peers_row + digit]);
-            let before = (atomicLoad(&warp_counts[count_row + digit]) >> count_shift) & 0xffffu;
-            ranks[r] = before + countOneBits(mask & (lane_bit - 1u));
-        }
-        workgroupBarrier();
-        // The highest peer of the round adds the round's count for the next rounds.
-        if digit != NONE && (mask >> lane) == 1u {
-            atomicAdd(&warp_counts[count_row + digit], countOneBits(mask) << count_shift);
-        }
-        prev = digit;
     }
+    prefix[lid] = widen(count.x);
+    prefix[WORKGROUP + lid] = widen(count.x >> 16u);
+    prefix[2u * WORKGROUP + lid] = widen(count.y);
+    prefix[3u * WORKGROUP + lid] = widen(count.y >> 16u);
+    prefix[4u * WORKGROUP + lid] = widen(count.z);
+    prefix[5u * WORKGROUP + lid] = widen(count.z >> 16u);
+    prefix[6u * WORKGROUP + lid] = widen(count.w);
+    prefix[7u * WORKGROUP + lid] = widen(count.w >> 16u);
     workgroupBarrier();
-
-    // Invocation `lid` owns digit `lid`: per-warp counts -> exclusive prefix over warps (< TILE).
+    // Invocation lid scans invocations [8s, 8s + 8) of word w (two digits at once: the halves
+    // never carry, tile counts stay below 2^16).
+    let w = lid / 32u;
+    let s = lid % 32u;
     var run = 0u;
-    for (var i = 0u; i < 4u; i++) {
-        let packed = atomicLoad(&warp_counts[i * RADIX + lid]);
-        let even = packed & 0xffffu;
-        atomicStore(&warp_counts[i * RADIX + lid], run | ((run + even) << 16u));
-        run += even + (packed >> 16u);
+    for (var j = 0u; j < 8u; j++) {
+        let at = w * WORKGROUP + s * 8u + j;
+        let c = prefix[at];
+        prefix[at] = run;
+        run += c;
+    }
+    segments[lid] = run;
+    workgroupBarrier();
+    if lid < 8u {
+        var total = 0u;
+        for (var j = 0u; j < 32u; j++) {
+            let c = segments[lid * 32u + j];
+            segments[lid * 32u + j] = total;
+            total += c;
+        }
     }
     workgroupBarrier();
-
-    for (var r = 0u; r < ROUNDS; r++) {
-        let item = first + r * LANES;
+    let slots0 = vec4<u32>(first_slot(0u, lid, tile), first_slot(1u, lid, tile), first_slot(2u, lid, tile), first_slot(3u, lid, tile));
+    let slots1 = vec4<u32>(first_slot(4u, lid, tile), first_slot(5u, lid, tile), first_slot(6u, lid, tile), first_slot(7u, lid, tile));
+    let slots2 = vec4<u32>(first_slot(8u, lid, tile), first_slot(9u, lid, tile), first_slot(10u, lid, tile), first_slot(11u, lid, tile));
+    let slots3 = vec4<u32>(first_slot(12u, lid, tile), first_slot(13u, lid, tile), first_slot(14u, lid, tile), first_slot(15u, lid, tile));
+    var seen = vec4<u32>(0u);
+    for (var i = 0u; i < ITEMS; i++) {
+        let item = first + i;
         if item < params.n {
             let key = keys_in[item];
-            let digit = digit_of(key);
-            let prefix = (atomicLoad(&warp_counts[count_row + digit]) >> count_shift) & 0xffffu;
-            let dest = digit_base[digit] + prefix + ranks[r];
+            let d = digit_of(key);
+            let q = d >> 2u;
+            let slots = select(select(slots0, slots1, q == 1u), select(slots2, slots3, q == 3u), q >= 2u);
+            let dest = pick(slots, d & 3u) + ((pick(seen, q) >> ((d & 3u) * 8u)) & 0xffu);
+            seen += one_hot(d);
             keys_out[dest] = key;
             values_out[dest] = values_in[item];
         }

@@ -1,5 +1,6 @@
 // 63-bit Morton keys (21 bits per axis) of triangle AABB centroids normalized to the scene's
 // centroid bounds (LBVH stage 2, Karras 2012 §4), and the identity permutation as sort values.
+// The grid is cubic (cell size from the longest side), so thin axes do not waste top-level splits.
 // Keys are vec2<u32>(low 32 bits, high 32 bits); bit 3k+2 holds x's bit k, 3k+1 y's, 3k z's.
 #include "bvh_node.wgsl"
 #include "aabb.wgsl"
@@ -30,8 +31,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let t = triangles[i];
     let c = (triangle_min(t) + triangle_max(t)) * 0.5;
     let bounds = centroid_bounds[0];
-    let extent = bounds.max - bounds.min;
-    let scale = select(vec3<f32>(0.0), vec3<f32>(GRID) / extent, extent > vec3<f32>(0.0));
+    let e = bounds.max - bounds.min;
+    let extent = max(e.x, max(e.y, e.z));
+    let scale = select(0.0, GRID / extent, extent > 0.0);
     let q = vec3<u32>(clamp((c - bounds.min) * scale, vec3<f32>(0.0), vec3<f32>(GRID_MAX)));
     var key = vec2<u32>(0u);
     for (var bit = 0u; bit < 21u; bit++) {

@@ -11,6 +11,12 @@ pub enum Error {
     },
     #[error("malformed OBJ file {path}: {message}")]
     Obj { path: PathBuf, message: String },
+    #[error("malformed AFF file {path}, line {line}: {message}")]
+    Aff {
+        path: PathBuf,
+        line: usize,
+        message: String,
+    },
     #[error("scene '{0}' has no usable triangles")]
     EmptyScene(String),
     #[error("unknown scene '{name}': not a built-in scene name ({known}) and no such file")]

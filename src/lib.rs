@@ -5,6 +5,7 @@
 //! `bvh` (node layout, CPU reference builders, SAH, validation), `gpu` (device, timing, shaders),
 //! `trace` (camera, GPU path tracer and closest-hit queries).
 
+pub mod app;
 pub mod bvh;
 pub mod error;
 pub mod geometry;

@@ -78,18 +78,22 @@ fn lengths_around_tiles_and_blocks() {
 
 #[test]
 fn two_dimensional_grids() {
-    // Capped at 8 workgroups per dimension, 100,000 pairs need 49 tiles (a 7x7 grid) and 13 scan
-    // blocks (a 7x2 grid, one workgroup idle), and 16,385 pairs 9 tiles (5x2, one idle): the path
-    // that more than 65,535 * TILE_SIZE pairs take under a real device limit.
+    // Capped at 8 workgroups per dimension, 100,000 pairs need 13 tiles (a 7x2 grid, one
+    // workgroup idle) and 65,537 pairs 9 tiles (5x2, one idle): the path that more than
+    // 65,535 * TILE_SIZE pairs take under a real device limit.
     let mut sorter = RadixSort::new(gpu()).with_max_workgroups_per_dimension(8);
-    let n = 100_000;
-    assert!(n > 8 * TILE_SIZE as usize);
-    check(&mut sorter, &random_keys(n, 40, 20), 40);
-    check(
-        &mut sorter,
-        &random_keys(8 * TILE_SIZE as usize + 1, 17, 21),
-        17,
-    );
+    for (n, bits, seed) in [(100_000, 40, 20), (8 * TILE_SIZE as usize + 1, 17, 21)] {
+        assert!(n > 8 * TILE_SIZE as usize);
+        check(&mut sorter, &random_keys(n, bits, seed), bits);
+    }
+}
+
+#[test]
+fn two_level_scan() {
+    // 600,000 pairs give 74 tiles, 1,184 counts: two scan levels and an add-back. 12-bit keys:
+    // three passes, so also the copy to the scratch buffers that odd pass counts start with.
+    let mut sorter = RadixSort::new(gpu());
+    check(&mut sorter, &random_keys(600_000, 12, 22), 12);
 }
 
 #[test]
@@ -132,8 +136,10 @@ fn scratch_reuse_and_growth() {
 fn two_sorts_in_one_submission() {
     let ctx = gpu();
     let mut sorter = RadixSort::new(ctx);
+    // 16 passes, then 3 (which start with a copy to the scratch buffers), then a no-op, all
+    // recorded into one encoder with one timer slot each.
     let a = random_keys(20_000, 63, 60);
-    let b = random_keys(30_000, 24, 61);
+    let b = random_keys(30_000, 11, 61);
     let upload = |keys: &[u64]| {
         let split_keys: Vec<[u32; 2]> = keys.iter().map(|&k| split(k)).collect();
         let values: Vec<u32> = (0..keys.len() as u32).collect();
@@ -144,7 +150,8 @@ fn two_sorts_in_one_submission() {
     };
     let (ka, va) = upload(&a);
     let (kb, vb) = upload(&b);
-    let mut timer = treelet::gpu::GpuTimer::new(ctx, 2);
+    let (k1, v1) = upload(&[42]);
+    let mut timer = treelet::gpu::GpuTimer::new(ctx, 3);
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
     sorter
         .sort(
@@ -164,13 +171,16 @@ fn two_sorts_in_one_submission() {
             &kb,
             &vb,
             b.len() as u32,
-            24,
+            11,
             Some(&mut timer),
         )
         .unwrap();
+    sorter
+        .sort(ctx, &mut encoder, &k1, &v1, 1, 63, Some(&mut timer))
+        .unwrap();
     timer.resolve(&mut encoder);
     ctx.queue.submit([encoder.finish()]);
-    for (keys, kbuf, vbuf, bits) in [(&a, &ka, &va, 63), (&b, &kb, &vb, 24)] {
+    for (keys, kbuf, vbuf, bits) in [(&a, &ka, &va, 63), (&b, &kb, &vb, 11)] {
         let got_keys: Vec<[u32; 2]> = treelet::gpu::read_buffer(ctx, kbuf, keys.len()).unwrap();
         let got_values: Vec<u32> = treelet::gpu::read_buffer(ctx, vbuf, keys.len()).unwrap();
         let got_keys: Vec<u64> = got_keys.into_iter().map(join).collect();
@@ -183,7 +193,7 @@ fn two_sorts_in_one_submission() {
     let times = timer.read(ctx).unwrap();
     assert_eq!(
         times.iter().map(|t| t.label.as_str()).collect::<Vec<_>>(),
-        ["sort", "sort"]
+        ["sort", "sort", "sort"]
     );
 }
 

@@ -4,6 +4,7 @@
 use std::time::Instant;
 
 use super::lbvh::LbvhBuilder;
+use super::treelet::{TrbvhBuilder, TreeletSettings};
 use super::{build_sweep_sah, SahParams};
 use crate::gpu::{GpuContext, StageTime};
 use crate::scene::Scene;
@@ -17,6 +18,8 @@ pub enum Builder {
     Sweep,
     /// GPU LBVH (Karras 2012): Morton order, one primitive per leaf.
     Lbvh,
+    /// GPU TRBVH (Karras & Aila 2013): LBVH + treelet restructuring rounds + leaf collapse.
+    Trbvh(TreeletSettings),
 }
 
 /// Build timings. For GPU builders `build_ms` is the sum of the GPU stage times (timestamp
@@ -29,18 +32,39 @@ pub struct BuildReport {
 }
 
 impl Builder {
-    pub const ALL: &[Builder] = &[Builder::Sweep, Builder::Lbvh];
+    pub const ALL: &[Builder] = &[
+        Builder::Sweep,
+        Builder::Lbvh,
+        Builder::Trbvh(TreeletSettings::BALANCED),
+    ];
 
     pub fn name(self) -> &'static str {
         match self {
             Builder::Sweep => "sweep",
             Builder::Lbvh => "lbvh",
+            Builder::Trbvh(_) => "trbvh",
         }
     }
 
     /// Whether the builder runs on the GPU (the per-frame path) rather than as a CPU reference.
     pub fn is_gpu(self) -> bool {
-        matches!(self, Builder::Lbvh)
+        matches!(self, Builder::Lbvh | Builder::Trbvh(_))
+    }
+
+    /// The same builder with other treelet settings (no effect on builders without treelets).
+    pub fn with_treelet_settings(self, settings: TreeletSettings) -> Self {
+        match self {
+            Builder::Trbvh(_) => Builder::Trbvh(settings),
+            other => other,
+        }
+    }
+
+    /// "trbvh n=7 r=3" style label for reports.
+    pub fn label(self) -> String {
+        match self {
+            Builder::Trbvh(s) => format!("trbvh n={} r={}", s.treelet_size, s.rounds),
+            other => other.name().to_string(),
+        }
     }
 
     pub fn parse(name: &str) -> Result<Self> {
@@ -83,9 +107,9 @@ impl Builder {
                 };
                 Ok((gpu_scene, report))
             }
-            Builder::Lbvh => {
+            Builder::Lbvh | Builder::Trbvh(_) => {
                 let mut gpu_scene = GpuScene::upload_geometry(ctx, scene, 1, 1)?;
-                let mut builder = LbvhBuilder::new(ctx);
+                let mut builder = GpuBuilder::new(ctx, self, params)?;
                 builder.build(ctx, &mut gpu_scene)?;
                 let mut reports = Vec::new();
                 for _ in 0..repeats.max(1) {
@@ -106,6 +130,42 @@ impl Builder {
                 let median = reports.swap_remove(reports.len() / 2);
                 Ok((gpu_scene, median))
             }
+        }
+    }
+}
+
+/// A GPU builder ready to rebuild a scene's tree every frame.
+pub enum GpuBuilder {
+    Lbvh(Box<LbvhBuilder>),
+    Trbvh(Box<TrbvhBuilder>),
+}
+
+impl GpuBuilder {
+    /// Pipelines for `builder`, which must be a GPU builder.
+    pub fn new(ctx: &GpuContext, builder: Builder, params: &SahParams) -> Result<Self> {
+        match builder {
+            Builder::Lbvh => Ok(Self::Lbvh(Box::new(LbvhBuilder::new(ctx)))),
+            Builder::Trbvh(settings) => Ok(Self::Trbvh(Box::new(TrbvhBuilder::new(
+                ctx, settings, *params,
+            )?))),
+            Builder::Sweep => Err(Error::InvalidArgument(
+                "sweep is a CPU reference builder, not a GPU builder".into(),
+            )),
+        }
+    }
+
+    /// SAH parameters for the next builds (the treelet builder's cost model and max leaf size).
+    pub fn set_sah_params(&mut self, params: SahParams) {
+        if let Self::Trbvh(b) = self {
+            b.sah = params;
+        }
+    }
+
+    /// Rebuilds the scene's tree in place; returns the per-stage GPU times.
+    pub fn build(&mut self, ctx: &GpuContext, scene: &mut GpuScene) -> Result<Vec<StageTime>> {
+        match self {
+            Self::Lbvh(b) => b.build(ctx, scene),
+            Self::Trbvh(b) => b.build(ctx, scene),
         }
     }
 }

@@ -2,13 +2,16 @@
 //! reference builders (test oracles and quality anchors, never the per-frame path).
 
 mod builder;
+mod export;
 pub mod lbvh;
 mod node;
 mod sah;
 mod sweep;
+pub mod treelet;
 mod validate;
 
-pub use builder::Builder;
+pub use builder::{BuildReport, Builder, GpuBuilder};
+pub use export::{read_bvh, write_bvh, BVH_MAGIC};
 pub use node::{Bvh, BvhNode, LEAF_FLAG};
 pub use sah::{sah_cost, SahParams};
 pub use sweep::build_sweep_sah;

@@ -2,11 +2,13 @@
 //! print one JSON object per line.
 
 use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
 
 use clap::Args;
 use serde::Serialize;
-use treelet::bvh::{sah_cost, validate, Builder};
-use treelet::gpu::{GpuContext, StageTime};
+use treelet::bvh::treelet::TreeletSettings;
+use treelet::bvh::{sah_cost, validate, write_bvh, Builder};
+use treelet::gpu::{aggregate_stages, GpuContext};
 use treelet::scene::load_scene;
 use treelet::trace::PathTracer;
 use treelet::Result;
@@ -26,6 +28,10 @@ pub struct BenchArgs {
     /// Untimed trace passes before measuring (the first dispatch compiles shaders)
     #[arg(long, default_value_t = 1)]
     warmup: u32,
+    /// Write each built tree to this file (format in the README; with several builders the
+    /// builder label is added to the file name)
+    #[arg(long)]
+    export_bvh: Option<PathBuf>,
     /// Timed builds per GPU builder (the median is reported)
     #[arg(long, default_value_t = 5)]
     repeats: u32,
@@ -35,6 +41,8 @@ pub struct BenchArgs {
 struct BenchRecord {
     scene: String,
     builder: &'static str,
+    treelet_size: Option<u32>,
+    rounds: Option<u32>,
     adapter: String,
     triangles: usize,
     nodes: usize,
@@ -58,12 +66,22 @@ struct BenchRecord {
 pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
     let scene = load_scene(&args.trace.scene)?;
     let params = args.trace.sah_params()?;
-    for &builder in &args.builder {
+    let builders = args.trace.builder_variants(&args.builder);
+    for &builder in &builders {
         let (gpu_scene, report) = builder.build(gpu, &scene, &params, args.repeats)?;
         let bvh = gpu_scene.download_bvh(gpu)?;
         let validation = validate(&bvh, &scene.triangles);
         if let Err(e) = &validation {
-            log::error!("{} tree of {} is invalid: {e}", builder.name(), scene.name);
+            log::error!("{} tree of {} is invalid: {e}", builder.label(), scene.name);
+        }
+        if let Some(path) = &args.export_bvh {
+            let path = if builders.len() > 1 {
+                labelled_path(path, &builder.label())
+            } else {
+                path.clone()
+            };
+            write_bvh(&path, &bvh, scene.triangles.len() as u32)?;
+            log::info!("wrote {}", path.display());
         }
         let mut tracer = PathTracer::new(gpu, args.trace.render_settings())?;
         for _ in 0..args.warmup {
@@ -74,6 +92,8 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
         let record = BenchRecord {
             scene: scene.name.clone(),
             builder: builder.name(),
+            treelet_size: treelet_settings(builder).map(|s| s.treelet_size),
+            rounds: treelet_settings(builder).map(|s| s.rounds),
             adapter: gpu.adapter_description(),
             triangles: scene.triangles.len(),
             nodes: bvh.nodes.len(),
@@ -81,7 +101,10 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
             build_ms: report.build_ms,
             build_wall_ms: report.wall_ms,
             mtris_per_s: scene.triangles.len() as f64 / (report.build_ms * 1e3),
-            stages_ms: stage_totals(report.stages),
+            stages_ms: aggregate_stages(report.stages)
+                .into_iter()
+                .map(|s| (s.label, s.ms))
+                .collect(),
             sah: sah_cost(&bvh, &params),
             valid: validation.is_ok(),
             width: args.trace.width,
@@ -101,12 +124,28 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
     Ok(())
 }
 
-/// Stage times by label; passes with the same label (e.g. the sort's) are added up.
-fn stage_totals(stages: Vec<StageTime>) -> BTreeMap<String, Option<f64>> {
-    let mut totals: BTreeMap<String, Option<f64>> = BTreeMap::new();
-    for stage in stages {
-        let total = totals.entry(stage.label).or_insert(Some(0.0));
-        *total = total.zip(stage.ms).map(|(a, b)| a + b);
+fn treelet_settings(builder: Builder) -> Option<TreeletSettings> {
+    match builder {
+        Builder::Trbvh(settings) => Some(settings),
+        _ => None,
     }
-    totals
+}
+
+/// `out.bvh` + "trbvh n=7 r=3" -> `out-trbvh-n7-r3.bvh`.
+fn labelled_path(path: &Path, label: &str) -> PathBuf {
+    let tag: String = label
+        .chars()
+        .filter_map(|c| match c {
+            ' ' => Some('-'),
+            '=' => None,
+            c => Some(c),
+        })
+        .collect();
+    let stem = path
+        .file_stem()
+        .map_or("tree".into(), |s| s.to_string_lossy());
+    let ext = path
+        .extension()
+        .map_or(String::new(), |e| format!(".{}", e.to_string_lossy()));
+    path.with_file_name(format!("{stem}-{tag}{ext}"))
 }

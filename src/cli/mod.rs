@@ -2,8 +2,10 @@
 
 mod bench;
 mod render;
+mod view;
 
 use clap::{Args, Parser, Subcommand};
+use treelet::bvh::treelet::TreeletSettings;
 use treelet::bvh::{Builder, SahParams};
 use treelet::gpu::{GpuContext, GpuOptions};
 use treelet::trace::RenderSettings;
@@ -34,6 +36,8 @@ enum Command {
     Bench(bench::BenchArgs),
     /// List the built-in and shared scene names
     Scenes,
+    /// Open the interactive viewer (the default when a display is available)
+    View(view::ViewArgs),
 }
 
 /// Options shared by `render` and `bench`.
@@ -57,9 +61,56 @@ pub struct TraceArgs {
     /// Maximum primitives per leaf
     #[arg(long, default_value_t = SahParams::default().max_leaf_size)]
     max_leaf_size: u32,
+    /// Treelet preset for trbvh: fast (n=5, 1 round), balanced (n=7, 3 rounds, the paper's) or high (n=8, 4 rounds)
+    #[arg(long, default_value = "balanced", value_parser = parse_preset)]
+    preset: TreeletSettings,
+    /// Leaves per treelet (3..=8) for trbvh, overriding the preset; `bench` takes a comma-separated list
+    #[arg(long, value_delimiter = ',')]
+    treelet_size: Vec<u32>,
+    /// Restructuring rounds for trbvh, overriding the preset; `bench` takes a comma-separated list
+    #[arg(long, value_delimiter = ',')]
+    rounds: Vec<u32>,
 }
 
 impl TraceArgs {
+    /// Every combination of the requested treelet sizes and rounds (the preset's where not given).
+    fn treelet_variants(&self) -> Vec<TreeletSettings> {
+        let sizes = if self.treelet_size.is_empty() {
+            vec![self.preset.treelet_size]
+        } else {
+            self.treelet_size.clone()
+        };
+        let rounds = if self.rounds.is_empty() {
+            vec![self.preset.rounds]
+        } else {
+            self.rounds.clone()
+        };
+        sizes
+            .iter()
+            .flat_map(|&treelet_size| {
+                rounds.iter().map(move |&rounds| TreeletSettings {
+                    treelet_size,
+                    rounds,
+                })
+            })
+            .collect()
+    }
+
+    /// The builders to run: `builders`, with trbvh expanded into every treelet variant.
+    fn builder_variants(&self, builders: &[Builder]) -> Vec<Builder> {
+        builders
+            .iter()
+            .flat_map(|&b| match b {
+                Builder::Trbvh(_) => self
+                    .treelet_variants()
+                    .into_iter()
+                    .map(|s| b.with_treelet_settings(s))
+                    .collect(),
+                other => vec![other],
+            })
+            .collect()
+    }
+
     fn render_settings(&self) -> RenderSettings {
         RenderSettings {
             width: self.width,
@@ -82,6 +133,10 @@ impl TraceArgs {
     }
 }
 
+fn parse_preset(name: &str) -> std::result::Result<TreeletSettings, String> {
+    TreeletSettings::preset(name).map_err(|e| e.to_string())
+}
+
 fn parse_builder(name: &str) -> std::result::Result<Builder, String> {
     Builder::parse(name).map_err(|e| e.to_string())
 }
@@ -101,12 +156,23 @@ pub fn run(cli: Cli) -> Result<()> {
             }
             Ok(())
         }
+        Command::View(args) => view::run(cli.adapter.clone(), args),
     }
 }
 
-/// What `treelet` without arguments does: render the default scene to `treelet.png`.
+/// What `treelet` without arguments does: open the viewer when a display is available (DISPLAY or
+/// WAYLAND_DISPLAY set), otherwise render the default scene to `treelet.png`.
 fn default_command() -> Command {
-    Cli::parse_from(["treelet", "render"])
+    let has_display = ["DISPLAY", "WAYLAND_DISPLAY"]
+        .iter()
+        .any(|v| std::env::var_os(v).is_some_and(|s| !s.is_empty()));
+    let command = if has_display {
+        "view"
+    } else {
+        log::info!("no display (DISPLAY and WAYLAND_DISPLAY unset): rendering to treelet.png instead of opening the viewer");
+        "render"
+    };
+    Cli::parse_from(["treelet", command])
         .command
-        .expect("`render` parses as a command")
+        .expect("the default command parses")
 }

@@ -27,10 +27,16 @@ pub fn run(gpu: &GpuContext, args: &RenderArgs) -> Result<()> {
     let scene = load_scene(&args.trace.scene)?;
     let params = args.trace.sah_params()?;
     log::info!("{}: {} triangles", scene.name, scene.triangles.len());
-    let (gpu_scene, report) = args.builder.build(gpu, &scene, &params, 1)?;
+    let builders = args.trace.builder_variants(&[args.builder]);
+    let [builder] = builders[..] else {
+        return Err(Error::InvalidArgument(
+            "render takes one --treelet-size and one --rounds value".into(),
+        ));
+    };
+    let (gpu_scene, report) = builder.build(gpu, &scene, &params, 1)?;
     log::info!(
         "{} build: {:.2} ms, {} nodes",
-        args.builder.name(),
+        builder.label(),
         report.build_ms,
         gpu_scene.node_count
     );

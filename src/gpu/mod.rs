@@ -12,4 +12,4 @@ pub use buffers::{
 };
 pub use context::{GpuContext, GpuOptions};
 pub use shaders::{compute_pipeline, shader_source, KERNELS};
-pub use timer::{GpuTimer, StageTime};
+pub use timer::{aggregate_stages, GpuTimer, StageTime};

@@ -27,6 +27,18 @@ const INCLUDES: &[(&str, &str)] = &[
 /// Every compute kernel: (file name, source before include expansion).
 pub const KERNELS: &[(&str, &str)] = &[
     (
+        "treelet_optimize.wgsl",
+        include_str!("../../shaders/treelet_optimize.wgsl"),
+    ),
+    (
+        "nodes_mark.wgsl",
+        include_str!("../../shaders/nodes_mark.wgsl"),
+    ),
+    (
+        "nodes_compact.wgsl",
+        include_str!("../../shaders/nodes_compact.wgsl"),
+    ),
+    (
         "keys_histogram.wgsl",
         include_str!("../../shaders/keys_histogram.wgsl"),
     ),
@@ -69,6 +81,10 @@ pub const KERNELS: &[(&str, &str)] = &[
     (
         "image_tonemap.wgsl",
         include_str!("../../shaders/image_tonemap.wgsl"),
+    ),
+    (
+        "image_display.wgsl",
+        include_str!("../../shaders/image_display.wgsl"),
     ),
 ];
 

@@ -103,3 +103,16 @@ impl GpuTimer {
             .collect())
     }
 }
+
+/// Adds up stages with the same label (e.g. several treelet rounds), in order of first
+/// appearance; a label is "n/a" if any of its passes is.
+pub fn aggregate_stages(stages: Vec<StageTime>) -> Vec<StageTime> {
+    let mut out: Vec<StageTime> = Vec::new();
+    for stage in stages {
+        match out.iter_mut().find(|s| s.label == stage.label) {
+            Some(total) => total.ms = total.ms.zip(stage.ms).map(|(a, b)| a + b),
+            None => out.push(stage),
+        }
+    }
+    out
+}

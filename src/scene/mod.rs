@@ -2,12 +2,14 @@
 //! Sources: OBJ files (`obj`), procedural built-ins (`procedural`), looked up by name or path in
 //! `registry`. Every scene passes through `sanitize` (the documented bad-geometry policy).
 
+mod bart;
 mod camera;
 mod obj;
 mod procedural;
 mod registry;
 mod sanitize;
 
+pub use bart::{BartScene, CONE_SIDES};
 pub use camera::Camera;
 pub use obj::load_obj;
 pub use procedural::{cornell_box, tessellated_field};

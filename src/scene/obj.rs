@@ -336,6 +336,11 @@ mod tests {
                 "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/5 2/1 3/1\n",
             ),
             ("w_zero.obj", "v 1 2 3 0\n"),
+            // Overflows tobj's index arithmetic (a panic with overflow checks, caught).
+            (
+                "tex_overflow.obj",
+                "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/-5 2/1 3/1\n",
+            ),
         ] {
             let path = write(&dir, name, text);
             match load_obj(&path) {

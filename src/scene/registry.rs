@@ -188,8 +188,9 @@ fn default_scene_dirs() -> Vec<PathBuf> {
     ]
 }
 
-/// The shared scenes folder: `$TREELET_SCENES_DIR` if set (whether or not it exists), otherwise
-/// the first existing of `<crate>/../shared/scenes`, `./../shared/scenes` and `./shared/scenes`.
+/// The shared scenes folder: `$TREELET_SCENES_DIR` if set and non-empty (whether or not it
+/// exists), otherwise the first existing of `<crate>/../shared/scenes`, `./../shared/scenes` and
+/// `./shared/scenes`.
 pub fn shared_scenes_dir() -> Option<PathBuf> {
     match std::env::var_os(SCENES_DIR_ENV) {
         Some(dir) if !dir.is_empty() => Some(PathBuf::from(dir)),

@@ -241,8 +241,15 @@ impl PathTracer {
         }
     }
 
-    /// Tonemaps the accumulated image and reads it back.
-    pub fn read_image(&self, ctx: &GpuContext) -> Result<image::RgbaImage> {
+    /// The tonemapped image: `width * height` packed RGBA8 pixels (r in the low byte), row 0 at
+    /// the top, written by `tonemap`.
+    pub fn pixels(&self) -> &wgpu::Buffer {
+        &self.pixels
+    }
+
+    /// Records the tonemap dispatch (accumulation -> `pixels`) into `encoder`, without reading
+    /// anything back: the viewer displays `pixels` straight from the GPU.
+    pub fn tonemap(&self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder) {
         let s = self.settings;
         let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("image_tonemap"),
@@ -253,16 +260,20 @@ impl PathTracer {
                 bind_entry(2, &self.pixels),
             ],
         });
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("image_tonemap"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(&self.tonemap_pipeline);
+        pass.set_bind_group(0, &bind_group, &[]);
+        pass.dispatch_workgroups(s.width.div_ceil(8), s.height.div_ceil(8), 1);
+    }
+
+    /// Tonemaps the accumulated image and reads it back.
+    pub fn read_image(&self, ctx: &GpuContext) -> Result<image::RgbaImage> {
+        let s = self.settings;
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("image_tonemap"),
-                timestamp_writes: None,
-            });
-            pass.set_pipeline(&self.tonemap_pipeline);
-            pass.set_bind_group(0, &bind_group, &[]);
-            pass.dispatch_workgroups(s.width.div_ceil(8), s.height.div_ceil(8), 1);
-        }
+        self.tonemap(ctx, &mut encoder);
         ctx.queue.submit([encoder.finish()]);
         let pixels: Vec<u32> = read_buffer(ctx, &self.pixels, (s.width * s.height) as usize)?;
         image::RgbaImage::from_raw(s.width, s.height, bytemuck::cast_slice(&pixels).to_vec())

@@ -71,8 +71,8 @@ pub struct LbvhBuilder {
     scratch: Option<Scratch>,
 }
 
-/// Timestamped passes one build records (bounds, morton, the sort's, hierarchy, refit).
-const TIMER_CAPACITY: u32 = 16;
+/// Timestamped passes one build records (bounds, morton, sort, hierarchy, refit).
+const TIMER_CAPACITY: u32 = 5;
 
 impl LbvhBuilder {
     pub fn new(ctx: &GpuContext) -> Self {
@@ -89,14 +89,32 @@ impl LbvhBuilder {
     /// Builds the tree of `scene`'s triangles into `scene.nodes`/`scene.prim_indices` in one
     /// submission; returns the per-stage GPU times.
     pub fn build(&mut self, ctx: &GpuContext, scene: &mut GpuScene) -> Result<Vec<StageTime>> {
-        let n = self.prepare(ctx, scene)?;
         let mut timer = GpuTimer::new(ctx, TIMER_CAPACITY);
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        self.record_keys(ctx, &mut encoder, scene, n, &mut timer);
-        self.record_tree(ctx, &mut encoder, scene, n, &mut timer)?;
+        self.record(ctx, &mut encoder, scene, &mut timer)?;
         timer.resolve(&mut encoder);
         ctx.queue.submit([encoder.finish()]);
         timer.read(ctx)
+    }
+
+    /// Records a whole build into `encoder` (5 timestamped passes); returns the triangle count.
+    /// Later stages (treelet optimization) append to the same encoder.
+    pub fn record(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &mut GpuScene,
+        timer: &mut GpuTimer,
+    ) -> Result<u32> {
+        let n = self.prepare(ctx, scene)?;
+        self.record_keys(ctx, encoder, scene, n, timer);
+        self.record_tree(ctx, encoder, scene, n, timer)?;
+        Ok(n)
+    }
+
+    /// Parent links of the last build's nodes (root: unspecified), for passes that climb the tree.
+    pub fn parents(&self) -> Option<&wgpu::Buffer> {
+        self.scratch.as_ref().map(|s| &s.parents)
     }
 
     /// Like `build`, but in two submissions with every intermediate buffer read back.

@@ -28,16 +28,14 @@ fn spread_bits(x: u32) -> u64 {
     (0..21).fold(0u64, |acc, k| acc | (u64::from((x >> k) & 1) << (3 * k)))
 }
 
-/// CPU twin: the Morton key of one triangle's AABB centroid within `bounds`.
+/// CPU twin: the Morton key of one triangle's AABB centroid within `bounds`. The grid is cubic:
+/// its cell size follows the bounds' longest side on every axis, so flat scenes do not spend key
+/// bits (and top-level splits) on their thin axis.
 pub fn morton_key(triangle: &Triangle, bounds: &Aabb) -> u64 {
     let b = triangle.bounds();
     let c = (b.min + b.max) * 0.5;
-    let extent = bounds.max - bounds.min;
-    let scale = Vec3::select(
-        extent.cmpgt(Vec3::ZERO),
-        Vec3::splat(GRID) / extent,
-        Vec3::ZERO,
-    );
+    let extent = (bounds.max - bounds.min).max_element();
+    let scale = if extent > 0.0 { GRID / extent } else { 0.0 };
     let q = ((c - bounds.min) * scale).clamp(Vec3::ZERO, Vec3::splat(GRID - 1.0));
     (spread_bits(q.x as u32) << 2) | (spread_bits(q.y as u32) << 1) | spread_bits(q.z as u32)
 }

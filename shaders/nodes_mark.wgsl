@@ -1,0 +1,65 @@
+// Leaf collapse, step 1 (Karras & Aila 2013, §3 "we collapse subtrees into leaves"): marks which
+// nodes of the optimized working tree survive. A node "collapses" when it is a leaf or when its
+// SAH cost as one leaf, Ct·A·N, does not exceed its subtree cost C (and N <= max leaf size) —
+// the choice the treelet pass already made in C = min(split, leaf). A node is kept when no proper
+// ancestor collapses; a kept collapsing node becomes an output leaf holding its N primitives.
+// One invocation per node walks up its parent links. Writes flags (bit 0 kept, bit 1 output leaf)
+// and the two inputs of the compaction scans (kept count, leaf primitive count).
+#include "bvh_node.wgsl"
+
+struct CollapseParams {
+    node_count: u32,
+    row_pitch: u32,
+    max_leaf_size: u32,
+    ct: f32,
+    // Always 0: see `unfused` in treelet_optimize.wgsl; the area must round as it did there.
+    zero: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
+}
+
+@group(0) @binding(0) var<uniform> params: CollapseParams;
+@group(0) @binding(1) var<storage, read> nodes: array<BvhNode>;
+@group(0) @binding(2) var<storage, read> parents: array<u32>;
+@group(0) @binding(3) var<storage, read> prim_counts: array<u32>;
+@group(0) @binding(4) var<storage, read> costs: array<f32>;
+@group(0) @binding(5) var<storage, read_write> flags: array<u32>;
+@group(0) @binding(6) var<storage, read_write> kept_scan: array<u32>;
+@group(0) @binding(7) var<storage, read_write> leaf_prim_scan: array<u32>;
+
+fn unfused(x: f32) -> f32 {
+    return bitcast<f32>(bitcast<u32>(x) ^ params.zero);
+}
+
+fn collapses(node: u32) -> bool {
+    let b = nodes[node];
+    if (b.right_or_count & LEAF_FLAG) != 0u {
+        return true;
+    }
+    let n = prim_counts[node];
+    let e = b.max - b.min;
+    let a = 2.0 * (unfused(e.x * e.y) + unfused(e.y * e.z) + unfused(e.z * e.x));
+    return n <= params.max_leaf_size && params.ct * a * f32(n) <= costs[node];
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x + gid.y * params.row_pitch;
+    if i >= params.node_count {
+        return;
+    }
+    var kept = true;
+    var x = i;
+    while x != 0u {
+        x = parents[x];
+        if collapses(x) {
+            kept = false;
+            break;
+        }
+    }
+    let leaf = kept && collapses(i);
+    flags[i] = select(0u, 1u, kept) | select(0u, 2u, leaf);
+    kept_scan[i] = select(0u, 1u, kept);
+    leaf_prim_scan[i] = select(0u, prim_counts[i], leaf);
+}

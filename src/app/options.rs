@@ -1,0 +1,21 @@
+//! What the command line asks of the viewer: the first scene and builder, the adapter, the window
+//! size, and the automation flags used by scripts (screenshot after N frames, then exit).
+
+use std::path::PathBuf;
+
+use crate::bvh::Builder;
+use crate::gpu::GpuOptions;
+
+#[derive(Clone, Debug)]
+pub struct ViewerOptions {
+    /// Scene name (see the registry) or path to an OBJ file.
+    pub scene: String,
+    pub builder: Builder,
+    pub gpu: GpuOptions,
+    /// Inner size of the window in physical pixels.
+    pub window_size: (u32, u32),
+    /// Write a PNG of the whole window (image and panel) after `exit_after_frames` frames.
+    pub screenshot: Option<PathBuf>,
+    /// Exit (status 0) after this many presented frames.
+    pub exit_after_frames: Option<u64>,
+}

@@ -1,0 +1,83 @@
+//! The viewer's user-adjustable settings (builder, leaf size, samples per frame, bounces, per-frame
+//! rebuild). Any change to them restarts accumulation.
+
+use crate::bvh::{Builder, SahParams};
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ViewSettings {
+    pub builder: Builder,
+    pub max_leaf_size: u32,
+    pub samples_per_frame: u32,
+    /// Diffuse bounces after the primary hit (the tracer's `max_depth` is this + 1).
+    pub max_bounces: u32,
+    /// Rebuild the BVH every frame (GPU builders; CPU builders build once per change).
+    pub rebuild_every_frame: bool,
+}
+
+impl ViewSettings {
+    pub const MAX_SAMPLES_PER_FRAME: u32 = 64;
+    pub const MAX_BOUNCES: u32 = 16;
+    pub const MAX_LEAF_SIZE: u32 = 32;
+
+    pub fn new(builder: Builder) -> Self {
+        Self {
+            builder,
+            max_leaf_size: SahParams::default().max_leaf_size,
+            samples_per_frame: 1,
+            max_bounces: 3,
+            rebuild_every_frame: builder.is_gpu(),
+        }
+    }
+
+    /// Rays per path for the path tracer (1 = primary rays only).
+    pub fn max_depth(&self) -> u32 {
+        self.max_bounces + 1
+    }
+
+    pub fn sah_params(&self) -> SahParams {
+        SahParams {
+            max_leaf_size: self.max_leaf_size.max(1),
+            ..SahParams::default()
+        }
+    }
+
+    /// Whether the tree is rebuilt on every frame with these settings.
+    pub fn rebuilds_every_frame(&self) -> bool {
+        self.rebuild_every_frame && self.builder.is_gpu()
+    }
+
+    /// Switches builder; per-frame rebuilding defaults to on for GPU builders, off for CPU ones.
+    pub fn select_builder(&mut self, builder: Builder) {
+        if builder != self.builder {
+            self.builder = builder;
+            self.rebuild_every_frame = builder.is_gpu();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gpu_builders_rebuild_every_frame_by_default_cpu_ones_do_not() {
+        let mut s = ViewSettings::new(Builder::Lbvh);
+        assert!(s.rebuilds_every_frame());
+        s.select_builder(Builder::Sweep);
+        assert!(!s.rebuilds_every_frame());
+        s.rebuild_every_frame = true;
+        assert!(
+            !s.rebuilds_every_frame(),
+            "a CPU builder never rebuilds per frame"
+        );
+        s.select_builder(Builder::Lbvh);
+        assert!(s.rebuilds_every_frame());
+    }
+
+    #[test]
+    fn bounces_map_to_rays_per_path() {
+        let mut s = ViewSettings::new(Builder::Lbvh);
+        s.max_bounces = 0;
+        assert_eq!(s.max_depth(), 1);
+    }
+}

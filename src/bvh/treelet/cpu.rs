@@ -1,0 +1,229 @@
+//! CPU twin of the GPU treelet pipeline: the working tree (Karras layout with parent links,
+//! primitive counts and SAH costs), one restructuring round (Karras & Aila 2013, §3-4) processed in
+//! post-order exactly as the GPU's bottom-up climb processes it, and the leaf collapse with
+//! compaction. Same float operations in the same order as the kernels.
+
+use glam::Vec3;
+
+use super::dp::{solve_treelet, surface_area, CostModel, TreeletLeaf};
+use crate::bvh::{Bvh, BvhNode};
+
+/// The tree the optimizer rewrites in place: LBVH layout (internal 0..n-2, leaf j at n-1+j with
+/// one primitive `prims[j]`), parents, and per-node primitive counts and costs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WorkingTree {
+    pub nodes: Vec<BvhNode>,
+    pub parents: Vec<u32>,
+    pub prims: Vec<u32>,
+    pub prim_counts: Vec<u32>,
+    pub costs: Vec<f32>,
+}
+
+impl WorkingTree {
+    /// Wraps an LBVH (`lbvh.nodes`, `lbvh.prim_indices` in Morton order) and its parent links.
+    pub fn from_lbvh(lbvh: Bvh, parents: Vec<u32>) -> Self {
+        let count = lbvh.nodes.len();
+        Self {
+            nodes: lbvh.nodes,
+            parents,
+            prims: lbvh.prim_indices,
+            prim_counts: vec![0; count],
+            costs: vec![0.0; count],
+        }
+    }
+
+    fn area(&self, node: u32) -> f32 {
+        let n = &self.nodes[node as usize];
+        surface_area(Vec3::from(n.min), Vec3::from(n.max))
+    }
+
+    /// Internal nodes in post-order (children before parents).
+    fn post_order(&self) -> Vec<u32> {
+        let mut order = Vec::new();
+        let mut stack = vec![(0u32, false)];
+        while let Some((node, expanded)) = stack.pop() {
+            let n = self.nodes[node as usize];
+            if n.is_leaf() {
+                continue;
+            }
+            if expanded {
+                order.push(node);
+            } else {
+                let (l, r) = n.children();
+                stack.extend([(node, true), (r, false), (l, false)]);
+            }
+        }
+        order
+    }
+
+    /// One restructuring round: every node gets its primitive count and cost; nodes with at least
+    /// `gamma` primitives root a treelet of up to `treelet_size` leaves that is replaced by its
+    /// SAH-optimal topology when that is cheaper.
+    pub fn optimize_round(&mut self, model: &CostModel, treelet_size: u32, gamma: u32) {
+        for (i, n) in self.nodes.iter().enumerate() {
+            if n.is_leaf() {
+                self.prim_counts[i] = 1;
+                self.costs[i] = model.ct * surface_area(Vec3::from(n.min), Vec3::from(n.max));
+            }
+        }
+        for node in self.post_order() {
+            let (l, r) = self.nodes[node as usize].children();
+            let prims = self.prim_counts[l as usize] + self.prim_counts[r as usize];
+            self.prim_counts[node as usize] = prims;
+            self.costs[node as usize] = model.combine(
+                self.area(node),
+                prims,
+                self.costs[l as usize] + self.costs[r as usize],
+            );
+            if prims >= gamma {
+                self.optimize_treelet(node, model, treelet_size);
+            }
+        }
+    }
+
+    fn optimize_treelet(&mut self, root: u32, model: &CostModel, treelet_size: u32) {
+        let (l, r) = self.nodes[root as usize].children();
+        let mut leaves = vec![l, r];
+        let mut internal = vec![root];
+        while (leaves.len() as u32) < treelet_size {
+            let mut best = None;
+            let mut best_area = -1.0;
+            for (i, &node) in leaves.iter().enumerate() {
+                if !self.nodes[node as usize].is_leaf() {
+                    let a = self.area(node);
+                    if a > best_area {
+                        best_area = a;
+                        best = Some(i);
+                    }
+                }
+            }
+            let Some(best) = best else { break };
+            let expanded = leaves[best];
+            let (cl, cr) = self.nodes[expanded as usize].children();
+            leaves[best] = cl;
+            leaves.push(cr);
+            internal.push(expanded);
+        }
+        if leaves.len() < 3 {
+            return;
+        }
+        let treelet: Vec<TreeletLeaf> = leaves
+            .iter()
+            .map(|&node| {
+                let n = self.nodes[node as usize];
+                TreeletLeaf {
+                    min: Vec3::from(n.min),
+                    max: Vec3::from(n.max),
+                    cost: self.costs[node as usize],
+                    prims: self.prim_counts[node as usize],
+                }
+            })
+            .collect();
+        let sol = solve_treelet(&treelet, model);
+        if sol.cost[sol.full() as usize] >= self.costs[root as usize] {
+            return;
+        }
+        // Write back breadth-first, left = P, right = S \ P, reusing internal nodes in order.
+        let mut queue = std::collections::VecDeque::from([(sol.full(), root)]);
+        let mut next_internal = 1;
+        while let Some((s, node)) = queue.pop_front() {
+            let p = sol.split[s as usize];
+            let mut child = [0u32; 2];
+            for (k, part) in [p, s ^ p].into_iter().enumerate() {
+                child[k] = if part.count_ones() == 1 {
+                    leaves[part.trailing_zeros() as usize]
+                } else {
+                    let c = internal[next_internal];
+                    next_internal += 1;
+                    queue.push_back((part, c));
+                    c
+                };
+                self.parents[child[k] as usize] = node;
+            }
+            let (lo, hi) = sol.bounds(&treelet, s);
+            self.nodes[node as usize] = BvhNode {
+                min: lo.to_array(),
+                left_or_first: child[0],
+                max: hi.to_array(),
+                right_or_count: child[1],
+            };
+            self.prim_counts[node as usize] = sol.prims[s as usize];
+            self.costs[node as usize] = sol.cost[s as usize];
+        }
+    }
+
+    /// Whether `node` becomes (or is inside) a leaf: a leaf already, or Ct·A·N <= C with
+    /// N <= max leaf size (the kernel `nodes_mark.wgsl`).
+    fn collapses(&self, node: u32, model: &CostModel) -> bool {
+        let n = self.prim_counts[node as usize];
+        self.nodes[node as usize].is_leaf()
+            || (n <= model.max_leaf_size
+                && model.ct * self.area(node) * n as f32 <= self.costs[node as usize])
+    }
+
+    /// Collapse and compaction (the kernels `nodes_mark.wgsl` + scans + `nodes_compact.wgsl`):
+    /// kept nodes keep their relative order, output leaves gather their subtree's primitives
+    /// depth-first, left first.
+    pub fn collapse(&self, model: &CostModel) -> Bvh {
+        let count = self.nodes.len();
+        let mut kept = vec![false; count];
+        let mut leaf = vec![false; count];
+        for i in 0..count as u32 {
+            let mut x = i;
+            let mut keep = true;
+            while x != 0 {
+                x = self.parents[x as usize];
+                if self.collapses(x, model) {
+                    keep = false;
+                    break;
+                }
+            }
+            kept[i as usize] = keep;
+            leaf[i as usize] = keep && self.collapses(i, model);
+        }
+        let mut new_index = vec![0u32; count];
+        let mut leaf_first = vec![0u32; count];
+        let (mut nodes_out, mut prims_out) = (0u32, 0u32);
+        for i in 0..count {
+            new_index[i] = nodes_out;
+            leaf_first[i] = prims_out;
+            nodes_out += u32::from(kept[i]);
+            if leaf[i] {
+                prims_out += self.prim_counts[i];
+            }
+        }
+        let mut nodes = vec![BvhNode::leaf(crate::geometry::Aabb::EMPTY, 0, 0); nodes_out as usize];
+        let mut prim_indices = vec![0u32; prims_out as usize];
+        for i in 0..count {
+            if !kept[i] {
+                continue;
+            }
+            let n = self.nodes[i];
+            let out = &mut nodes[new_index[i] as usize];
+            if leaf[i] {
+                let mut written = leaf_first[i] as usize;
+                let mut stack = vec![i as u32];
+                while let Some(x) = stack.pop() {
+                    let w = self.nodes[x as usize];
+                    if w.is_leaf() {
+                        let first = w.left_or_first as usize;
+                        for &p in &self.prims[first..first + w.prim_count() as usize] {
+                            prim_indices[written] = p;
+                            written += 1;
+                        }
+                    } else {
+                        stack.extend([w.right_or_count, w.left_or_first]);
+                    }
+                }
+                *out = BvhNode::leaf(n.bounds(), leaf_first[i], self.prim_counts[i]);
+            } else {
+                let (l, r) = n.children();
+                *out = BvhNode::internal(n.bounds(), new_index[l as usize], new_index[r as usize]);
+            }
+        }
+        Bvh {
+            nodes,
+            prim_indices,
+        }
+    }
+}

@@ -1,0 +1,315 @@
+//! TRBVH: treelet restructuring of an LBVH on the GPU (Karras & Aila 2013, "Fast Parallel
+//! Construction of High-Quality Bounding Volume Hierarchies", §3-4), then leaf collapse and
+//! compaction into the traversal layout.
+//!
+//! Per build, all in one submission: the GPU LBVH (`bvh::lbvh`), `rounds` restructuring rounds
+//! (γ = treelet size, doubling each round), the collapse. Each part has a CPU twin
+//! (`build_trbvh_cpu`) that produces the identical tree, used as the test oracle.
+
+mod collapse;
+mod cpu;
+mod dp;
+mod optimize;
+
+pub use cpu::WorkingTree;
+pub use dp::{
+    solve_treelet, surface_area, CostModel, TreeletLeaf, TreeletSolution, MAX_TREELET_SIZE,
+};
+
+use collapse::{Collapse, CollapseBuffers};
+use optimize::{Round, TreeletOptimizer, TreeletState};
+
+use super::lbvh::{
+    build_lbvh_cpu, centroid_bounds_cpu, hierarchy_cpu, morton_keys_cpu, LbvhBuilder, MORTON_BITS,
+};
+use super::{Bvh, BvhNode, SahParams};
+use crate::gpu::{read_buffer, storage_buffer_zeroed, GpuContext, GpuTimer, StageTime};
+use crate::scene::Triangle;
+use crate::sort::sort_pairs_cpu;
+use crate::trace::GpuScene;
+use crate::{Error, Result};
+
+/// Largest leaf the GPU collapse may create (its gather stack holds a leaf's subtree).
+pub const MAX_GPU_LEAF_SIZE: u32 = 32;
+
+/// Treelet optimizer settings (presets as named constants; the paper's setting is `BALANCED`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TreeletSettings {
+    /// Leaves per treelet, 3..=8 (the paper uses 7).
+    pub treelet_size: u32,
+    /// Restructuring rounds (γ = treelet_size, doubled each round); 0 = LBVH + collapse only.
+    pub rounds: u32,
+}
+
+impl TreeletSettings {
+    /// Quick: small treelets, one round.
+    pub const FAST: Self = Self {
+        treelet_size: 5,
+        rounds: 1,
+    };
+    /// The paper's reference setting: treelets of 7 leaves, 3 rounds.
+    pub const BALANCED: Self = Self {
+        treelet_size: 7,
+        rounds: 3,
+    };
+    /// Largest treelets the kernel supports, more rounds.
+    pub const HIGH_QUALITY: Self = Self {
+        treelet_size: 8,
+        rounds: 4,
+    };
+
+    /// A preset by name: `fast`, `balanced` or `high`.
+    pub fn preset(name: &str) -> Result<Self> {
+        match name {
+            "fast" => Ok(Self::FAST),
+            "balanced" => Ok(Self::BALANCED),
+            "high" => Ok(Self::HIGH_QUALITY),
+            _ => Err(Error::InvalidArgument(format!(
+                "unknown treelet preset '{name}' (known: fast, balanced, high)"
+            ))),
+        }
+    }
+
+    /// Checks the settings together with the SAH parameters (whose max leaf size the collapse uses).
+    pub fn validate(&self, sah: &SahParams) -> Result<()> {
+        if !(3..=MAX_TREELET_SIZE).contains(&self.treelet_size) {
+            return Err(Error::InvalidArgument(format!(
+                "treelet size must be 3..={MAX_TREELET_SIZE}, got {}",
+                self.treelet_size
+            )));
+        }
+        if !(1..=MAX_GPU_LEAF_SIZE).contains(&sah.max_leaf_size) {
+            return Err(Error::InvalidArgument(format!(
+                "max leaf size must be 1..={MAX_GPU_LEAF_SIZE} for the GPU treelet builder, got {}",
+                sah.max_leaf_size
+            )));
+        }
+        if self.rounds > 16 {
+            return Err(Error::InvalidArgument(format!(
+                "at most 16 rounds, got {}",
+                self.rounds
+            )));
+        }
+        Ok(())
+    }
+
+    /// γ of each round; a single cost-only pass (no treelets) when `rounds` is 0.
+    fn gammas(&self) -> Vec<u32> {
+        if self.rounds == 0 {
+            return vec![u32::MAX];
+        }
+        (0..self.rounds)
+            .map(|r| self.treelet_size.saturating_mul(1 << r))
+            .collect()
+    }
+}
+
+/// The cost model of the DP, the node costs and the collapse.
+fn cost_model(sah: &SahParams) -> CostModel {
+    CostModel {
+        ci: sah.ci,
+        ct: sah.ct,
+        max_leaf_size: sah.max_leaf_size,
+    }
+}
+
+impl Default for TreeletSettings {
+    fn default() -> Self {
+        Self::BALANCED
+    }
+}
+
+/// CPU twin of the whole GPU TRBVH build.
+pub fn build_trbvh_cpu(triangles: &[Triangle], settings: &TreeletSettings, sah: &SahParams) -> Bvh {
+    optimize_cpu(triangles, settings, sah).collapse(&cost_model(sah))
+}
+
+/// CPU twin up to the end of the rounds (the working tree before the collapse).
+pub fn optimize_cpu(
+    triangles: &[Triangle],
+    settings: &TreeletSettings,
+    sah: &SahParams,
+) -> WorkingTree {
+    let bounds = centroid_bounds_cpu(triangles);
+    let keys = morton_keys_cpu(triangles, &bounds);
+    let values: Vec<u32> = (0..triangles.len() as u32).collect();
+    let (sorted_keys, _) = sort_pairs_cpu(&keys, &values, MORTON_BITS);
+    let mut tree = WorkingTree::from_lbvh(
+        build_lbvh_cpu(triangles),
+        hierarchy_cpu(&sorted_keys).parents,
+    );
+    let model = cost_model(sah);
+    for gamma in settings.gammas() {
+        tree.optimize_round(&model, settings.treelet_size, gamma);
+    }
+    tree
+}
+
+/// Scratch space for up to `capacity` triangles.
+struct Scratch {
+    capacity: u32,
+    prim_counts: wgpu::Buffer,
+    costs: wgpu::Buffer,
+    arrivals: wgpu::Buffer,
+    flags: wgpu::Buffer,
+    kept_scan: wgpu::Buffer,
+    leaf_prim_scan: wgpu::Buffer,
+    out_nodes: wgpu::Buffer,
+    out_prims: wgpu::Buffer,
+    tree_counts: wgpu::Buffer,
+}
+
+impl Scratch {
+    fn new(ctx: &GpuContext, capacity: u32) -> Result<Self> {
+        let nodes = u64::from(2 * capacity - 1);
+        Ok(Self {
+            capacity,
+            prim_counts: storage_buffer_zeroed(ctx, "treelet prim counts", nodes * 4)?,
+            costs: storage_buffer_zeroed(ctx, "treelet costs", nodes * 4)?,
+            arrivals: storage_buffer_zeroed(ctx, "treelet arrivals", u64::from(capacity) * 4)?,
+            flags: storage_buffer_zeroed(ctx, "collapse flags", nodes * 4)?,
+            kept_scan: storage_buffer_zeroed(ctx, "collapse kept scan", nodes * 4)?,
+            leaf_prim_scan: storage_buffer_zeroed(ctx, "collapse leaf scan", nodes * 4)?,
+            out_nodes: storage_buffer_zeroed(
+                ctx,
+                "bvh nodes",
+                nodes * std::mem::size_of::<BvhNode>() as u64,
+            )?,
+            out_prims: storage_buffer_zeroed(ctx, "prim indices", u64::from(capacity) * 4)?,
+            tree_counts: storage_buffer_zeroed(ctx, "tree counts", 8)?,
+        })
+    }
+}
+
+/// The working tree of a GPU build after its rounds, read back for comparison in tests.
+#[derive(Clone, Debug)]
+pub struct TrbvhStages {
+    pub working: WorkingTree,
+    pub bvh: Bvh,
+}
+
+/// GPU TRBVH builder: LBVH + treelet rounds + collapse, pipelines and scratch reused per frame.
+pub struct TrbvhBuilder {
+    lbvh: LbvhBuilder,
+    optimizer: TreeletOptimizer,
+    collapse: Collapse,
+    scratch: Option<Scratch>,
+    pub settings: TreeletSettings,
+    pub sah: SahParams,
+}
+
+impl TrbvhBuilder {
+    pub fn new(ctx: &GpuContext, settings: TreeletSettings, sah: SahParams) -> Result<Self> {
+        settings.validate(&sah)?;
+        Ok(Self {
+            lbvh: LbvhBuilder::new(ctx),
+            optimizer: TreeletOptimizer::new(ctx),
+            collapse: Collapse::new(ctx),
+            scratch: None,
+            settings,
+            sah,
+        })
+    }
+
+    /// Builds the optimized tree of `scene` into its `nodes`/`prim_indices`; returns stage times.
+    pub fn build(&mut self, ctx: &GpuContext, scene: &mut GpuScene) -> Result<Vec<StageTime>> {
+        self.build_inner(ctx, scene, false)
+            .map(|(stages, _)| stages)
+    }
+
+    /// Like `build`, and also reads back the working tree after the rounds (tests).
+    pub fn build_stages(&mut self, ctx: &GpuContext, scene: &mut GpuScene) -> Result<TrbvhStages> {
+        let (_, working) = self.build_inner(ctx, scene, true)?;
+        Ok(TrbvhStages {
+            working: working.expect("requested"),
+            bvh: scene.download_bvh(ctx)?,
+        })
+    }
+
+    fn build_inner(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &mut GpuScene,
+        read_working: bool,
+    ) -> Result<(Vec<StageTime>, Option<WorkingTree>)> {
+        self.settings.validate(&self.sah)?;
+        let gammas = self.settings.gammas();
+        let mut timer = GpuTimer::new(ctx, 6 + gammas.len() as u32);
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        let n = self.lbvh.record(ctx, &mut encoder, scene, &mut timer)?;
+        if self.scratch.as_ref().is_none_or(|s| s.capacity < n) {
+            self.scratch = None;
+            self.scratch = Some(Scratch::new(ctx, n)?);
+        }
+        let scratch = self.scratch.as_mut().expect("allocated above");
+        // The output buffers swap with the scene's each build, so they may come from a smaller scene.
+        let node_bytes = u64::from(2 * n - 1) * std::mem::size_of::<BvhNode>() as u64;
+        if scratch.out_nodes.size() < node_bytes {
+            scratch.out_nodes = storage_buffer_zeroed(ctx, "bvh nodes", node_bytes)?;
+        }
+        if scratch.out_prims.size() < u64::from(n) * 4 {
+            scratch.out_prims = storage_buffer_zeroed(ctx, "prim indices", u64::from(n) * 4)?;
+        }
+        let scratch = &*scratch;
+        let parents = self.lbvh.parents().expect("recorded above");
+        let state = TreeletState {
+            parents,
+            prim_counts: &scratch.prim_counts,
+            costs: &scratch.costs,
+            arrivals: &scratch.arrivals,
+        };
+        let model = cost_model(&self.sah);
+        for gamma in gammas {
+            encoder.clear_buffer(&scratch.arrivals, 0, None);
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("treelet round"),
+                timestamp_writes: timer.pass("treelets"),
+            });
+            let round = Round {
+                model,
+                treelet_size: self.settings.treelet_size,
+                gamma,
+            };
+            self.optimizer.record(ctx, &mut pass, scene, &state, &round);
+        }
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("collapse"),
+                timestamp_writes: timer.pass("collapse"),
+            });
+            let out = CollapseBuffers {
+                flags: &scratch.flags,
+                kept_scan: &scratch.kept_scan,
+                leaf_prim_scan: &scratch.leaf_prim_scan,
+                out_nodes: &scratch.out_nodes,
+                out_prims: &scratch.out_prims,
+                tree_counts: &scratch.tree_counts,
+            };
+            self.collapse
+                .record(ctx, &mut pass, scene, &state, &model, &out)?;
+        }
+        timer.resolve(&mut encoder);
+        ctx.queue.submit([encoder.finish()]);
+        let stages = timer.read(ctx)?;
+        let working = if read_working {
+            let count = (2 * n - 1) as usize;
+            Some(WorkingTree {
+                nodes: read_buffer(ctx, &scene.nodes, count)?,
+                parents: read_buffer(ctx, parents, count)?,
+                prims: read_buffer(ctx, &scene.prim_indices, n as usize)?,
+                prim_counts: read_buffer(ctx, &scratch.prim_counts, count)?,
+                costs: read_buffer(ctx, &scratch.costs, count)?,
+            })
+        } else {
+            None
+        };
+        let counts: Vec<u32> = read_buffer(ctx, &scratch.tree_counts, 2)?;
+        // The compacted tree becomes the scene's; the working buffers become next build's output.
+        let scratch = self.scratch.as_mut().expect("allocated above");
+        std::mem::swap(&mut scene.nodes, &mut scratch.out_nodes);
+        std::mem::swap(&mut scene.prim_indices, &mut scratch.out_prims);
+        scene.node_count = counts[0];
+        scene.prim_count = counts[1];
+        Ok((stages, working))
+    }
+}

@@ -1,0 +1,45 @@
+//! `treelet view`: the interactive viewer (see `treelet::app`), with automation flags for scripts
+//! (`--screenshot out.png --exit-after-frames N`).
+
+use std::path::PathBuf;
+
+use clap::Args;
+use treelet::app::ViewerOptions;
+use treelet::bvh::Builder;
+use treelet::gpu::GpuOptions;
+use treelet::Result;
+
+use super::{parse_builder, DEFAULT_SCENE};
+
+#[derive(Args, Debug)]
+pub struct ViewArgs {
+    /// Scene name (see `treelet scenes`) or path to an OBJ file
+    #[arg(long, default_value = DEFAULT_SCENE)]
+    scene: String,
+    /// BVH builder (GPU builders are rebuilt every frame)
+    #[arg(long, default_value = "lbvh", value_parser = parse_builder)]
+    builder: Builder,
+    /// Window width in pixels
+    #[arg(long, default_value_t = 1280, value_parser = clap::value_parser!(u32).range(1..))]
+    width: u32,
+    /// Window height in pixels
+    #[arg(long, default_value_t = 800, value_parser = clap::value_parser!(u32).range(1..))]
+    height: u32,
+    /// Write a PNG of the whole window (image and panel) after --exit-after-frames frames
+    #[arg(long, requires = "exit_after_frames")]
+    screenshot: Option<PathBuf>,
+    /// Exit after rendering this many frames
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    exit_after_frames: Option<u64>,
+}
+
+pub fn run(adapter: Option<String>, args: ViewArgs) -> Result<()> {
+    treelet::app::run(ViewerOptions {
+        scene: args.scene,
+        builder: args.builder,
+        gpu: GpuOptions { adapter },
+        window_size: (args.width, args.height),
+        screenshot: args.screenshot,
+        exit_after_frames: args.exit_after_frames,
+    })
+}
