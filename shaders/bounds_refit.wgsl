@@ -5,7 +5,8 @@
 // on storage memory) separates the box stores from the counter increment (release) and the
 // increment from the sibling's box loads (acquire). Barriers need uniform control flow, so every
 // invocation of a workgroup steps the climb loop together until all of them are done.
-// Input: prim_indices (sorted values), children from lbvh_hierarchy. Counters must start at zero.
+// Input: primitive boxes, prim_indices (sorted values), children from lbvh_hierarchy. Counters
+// must start at zero.
 #include "bvh_node.wgsl"
 #include "aabb.wgsl"
 
@@ -19,7 +20,7 @@ struct RefitParams {
 }
 
 @group(0) @binding(0) var<uniform> params: RefitParams;
-@group(0) @binding(1) var<storage, read> triangles: array<Triangle>;
+@group(0) @binding(1) var<storage, read> prim_boxes: array<Aabb>;
 @group(0) @binding(2) var<storage, read> prim_indices: array<u32>;
 @group(0) @binding(3) var<storage, read> parents: array<u32>;
 @group(0) @binding(4) var<storage, read_write> node_words: array<atomic<u32>>;
@@ -67,8 +68,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
     }
     workgroupBarrier();
     if j < n {
-        let t = triangles[prim_indices[j]];
-        store_box(node, triangle_min(t), triangle_max(t));
+        let b = prim_boxes[prim_indices[j]];
+        store_box(node, b.min, b.max);
         atomicStore(&node_words[node * 8u + 3u], j);
         atomicStore(&node_words[node * 8u + 7u], LEAF_FLAG | 1u);
         is_climbing = node != 0u;

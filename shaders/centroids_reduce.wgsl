@@ -1,8 +1,7 @@
 // Scene centroid bounds by parallel reduction (LBVH stage 1, Karras 2012 §3). Each workgroup
-// reduces a tile of TILE elements to one box: `from_triangles` reads triangle AABB centroids,
-// `from_boxes` reduces the previous level's boxes. Levels repeat until one box remains.
+// reduces a tile of TILE elements to one box: `from_prims` reads the centroids of the primitive
+// boxes, `from_boxes` reduces the previous level's boxes. Levels repeat until one box remains.
 // min/max are exact, so the result is bit-identical to the CPU twin in any order.
-#include "bvh_node.wgsl"
 #include "aabb.wgsl"
 
 const WORKGROUP: u32 = 256u;
@@ -17,9 +16,8 @@ struct ReduceParams {
 }
 
 @group(0) @binding(0) var<uniform> params: ReduceParams;
-@group(0) @binding(1) var<storage, read> triangles: array<Triangle>;
-@group(0) @binding(2) var<storage, read> boxes_in: array<Aabb>;
-@group(0) @binding(3) var<storage, read_write> boxes_out: array<Aabb>;
+@group(0) @binding(1) var<storage, read> boxes_in: array<Aabb>;
+@group(0) @binding(2) var<storage, read_write> boxes_out: array<Aabb>;
 
 var<workgroup> shared_min: array<vec3<f32>, WORKGROUP>;
 var<workgroup> shared_max: array<vec3<f32>, WORKGROUP>;
@@ -45,15 +43,14 @@ fn tile_index(wid: vec3<u32>, groups: vec3<u32>) -> u32 {
 }
 
 @compute @workgroup_size(WORKGROUP)
-fn from_triangles(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+fn from_prims(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let tile = tile_index(wid, groups);
     var lo = vec3<f32>(F32_MAX);
     var hi = vec3<f32>(-F32_MAX);
     for (var k = 0u; k < PER_INVOCATION; k++) {
         let i = tile * TILE + k * WORKGROUP + lid;
         if i < params.count {
-            let t = triangles[i];
-            let c = (triangle_min(t) + triangle_max(t)) * 0.5;
+            let c = (boxes_in[i].min + boxes_in[i].max) * 0.5;
             lo = min(lo, c);
             hi = max(hi, c);
         }

@@ -1,8 +1,7 @@
-// 63-bit Morton keys (21 bits per axis) of triangle AABB centroids normalized to the scene's
+// 63-bit Morton keys (21 bits per axis) of primitive box centroids normalized to the scene's
 // centroid bounds (LBVH stage 2, Karras 2012 §4), and the identity permutation as sort values.
 // The grid is cubic (cell size from the longest side), so thin axes do not waste top-level splits.
 // Keys are vec2<u32>(low 32 bits, high 32 bits); bit 3k+2 holds x's bit k, 3k+1 y's, 3k z's.
-#include "bvh_node.wgsl"
 #include "aabb.wgsl"
 
 struct MortonParams {
@@ -13,7 +12,7 @@ struct MortonParams {
 }
 
 @group(0) @binding(0) var<uniform> params: MortonParams;
-@group(0) @binding(1) var<storage, read> triangles: array<Triangle>;
+@group(0) @binding(1) var<storage, read> prim_boxes: array<Aabb>;
 // [0] holds the centroid bounds.
 @group(0) @binding(2) var<storage, read> centroid_bounds: array<Aabb>;
 @group(0) @binding(3) var<storage, read_write> keys: array<vec2<u32>>;
@@ -28,8 +27,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if i >= params.count {
         return;
     }
-    let t = triangles[i];
-    let c = (triangle_min(t) + triangle_max(t)) * 0.5;
+    let c = (prim_boxes[i].min + prim_boxes[i].max) * 0.5;
     let bounds = centroid_bounds[0];
     let e = bounds.max - bounds.min;
     let extent = max(e.x, max(e.y, e.z));

@@ -4,7 +4,9 @@
 // the choice the treelet pass already made in C = min(split, leaf). A node is kept when no proper
 // ancestor collapses; a kept collapsing node becomes an output leaf holding its N primitives.
 // One invocation per node walks up its parent links. Writes flags (bit 0 kept, bit 1 output leaf)
-// and the two inputs of the compaction scans (kept count, leaf primitive count).
+// and the two inputs of the compaction scans (kept count, leaf primitive count). With pre-split
+// references (has_refs) an output leaf counts each triangle once: its references are gathered
+// depth-first and mapped to triangle ids, duplicates dropped.
 #include "bvh_node.wgsl"
 
 struct CollapseParams {
@@ -14,9 +16,9 @@ struct CollapseParams {
     ct: f32,
     // Always 0: see `unfused` in treelet_optimize.wgsl; the area must round as it did there.
     zero: u32,
+    has_refs: u32,
     pad0: u32,
     pad1: u32,
-    pad2: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: CollapseParams;
@@ -27,6 +29,10 @@ struct CollapseParams {
 @group(0) @binding(5) var<storage, read_write> flags: array<u32>;
 @group(0) @binding(6) var<storage, read_write> kept_scan: array<u32>;
 @group(0) @binding(7) var<storage, read_write> leaf_prim_scan: array<u32>;
+@group(0) @binding(8) var<storage, read> prim_indices: array<u32>;
+@group(0) @binding(9) var<storage, read> ref_tris: array<u32>;
+
+#include "leaf_gather.wgsl"
 
 fn unfused(x: f32) -> f32 {
     return bitcast<f32>(bitcast<u32>(x) ^ params.zero);
@@ -61,5 +67,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let leaf = kept && collapses(i);
     flags[i] = select(0u, 1u, kept) | select(0u, 2u, leaf);
     kept_scan[i] = select(0u, 1u, kept);
-    leaf_prim_scan[i] = select(0u, prim_counts[i], leaf);
+    var prims = 0u;
+    if leaf {
+        prims = select(prim_counts[i], gather_leaf(i), params.has_refs != 0u);
+    }
+    leaf_prim_scan[i] = prims;
 }

@@ -9,7 +9,10 @@
 //   2. subset areas a(S) and primitive counts t(S) for all 2^m subsets, in parallel;
 //   3. dynamic programming over subset sizes 2..m-1 (subsets of one size in parallel, a barrier
 //      between sizes): c(S) = min(Ci·a(S) + min_P (c(P) + c(S\P)), Ct·a(S)·t(S)), each unordered
-//      partition once (P ranges over the non-empty subsets of S without its lowest bit);
+//      partition once (P ranges over the non-empty subsets of S without its lowest bit); a table
+//      of all 8-bit subsets ordered by size (then value), built once per workgroup, hands each
+//      invocation its subsets directly: the subsets of m leaves of size k are the first C(m, k)
+//      entries of size k;
 //   4. the full set's partitions spread over the workgroup and a min-reduce (ties: smaller P);
 //   5. if the optimal cost is lower than the current one, write the new topology back, reusing
 //      the treelet's internal nodes (root keeps its index), with boxes, N, C and parent links.
@@ -17,7 +20,7 @@
 // bvh::treelet::optimize_treelets_cpu (same operation order, same tie-breaking).
 #include "bvh_node.wgsl"
 
-const WORKGROUP: u32 = 64u;
+const WORKGROUP: u32 = 32u;
 const MAX_TREELET: u32 = 8u;
 const SUBSETS: u32 = 256u;
 const F32_MAX: f32 = 3.40282347e38;
@@ -57,6 +60,34 @@ var<workgroup> subset_prims: array<u32, SUBSETS>;
 var<workgroup> subset_split: array<u32, SUBSETS>;
 var<workgroup> reduce_cost: array<f32, WORKGROUP>;
 var<workgroup> reduce_split: array<u32, WORKGROUP>;
+var<workgroup> subsets_by_size: array<u32, SUBSETS>;
+
+// First entry of each subset size in `subsets_by_size` (sums of C(8, j), j < k).
+const SIZE_OFFSET = array<u32, 9>(0u, 1u, 9u, 37u, 93u, 163u, 219u, 247u, 255u);
+// C(m, k) for m, k <= 8, row m.
+const BINOMIAL = array<array<u32, 9>, 9>(
+    array<u32, 9>(1u, 0u, 0u, 0u, 0u, 0u, 0u, 0u, 0u),
+    array<u32, 9>(1u, 1u, 0u, 0u, 0u, 0u, 0u, 0u, 0u),
+    array<u32, 9>(1u, 2u, 1u, 0u, 0u, 0u, 0u, 0u, 0u),
+    array<u32, 9>(1u, 3u, 3u, 1u, 0u, 0u, 0u, 0u, 0u),
+    array<u32, 9>(1u, 4u, 6u, 4u, 1u, 0u, 0u, 0u, 0u),
+    array<u32, 9>(1u, 5u, 10u, 10u, 5u, 1u, 0u, 0u, 0u),
+    array<u32, 9>(1u, 6u, 15u, 20u, 15u, 6u, 1u, 0u, 0u),
+    array<u32, 9>(1u, 7u, 21u, 35u, 35u, 21u, 7u, 1u, 0u),
+    array<u32, 9>(1u, 8u, 28u, 56u, 70u, 56u, 28u, 8u, 1u),
+);
+
+// Fills `subsets_by_size`: subset s goes after every smaller subset of its size.
+fn build_subset_table(lid: u32) {
+    for (var s = lid; s < SUBSETS; s += WORKGROUP) {
+        let size = countOneBits(s);
+        var rank = 0u;
+        for (var t = 0u; t < s; t++) {
+            rank += select(0u, 1u, countOneBits(t) == size);
+        }
+        subsets_by_size[SIZE_OFFSET[size] + rank] = s;
+    }
+}
 
 fn word(node: u32, k: u32) -> u32 {
     return atomicLoad(&node_words[node * 8u + k]);
@@ -251,14 +282,9 @@ fn optimize_treelet(root: u32, lid: u32) {
     }
     workgroupBarrier();
     for (var size = 2u; size < m; size++) {
-        var seen = 0u;
-        for (var s = 3u; s < full; s++) {
-            if countOneBits(s) == size {
-                if seen % WORKGROUP == lid {
-                    solve_subset(s);
-                }
-                seen++;
-            }
+        let count = BINOMIAL[m][size];
+        for (var i = lid; i < count; i += WORKGROUP) {
+            solve_subset(subsets_by_size[SIZE_OFFSET[size] + i]);
         }
         workgroupBarrier();
     }
@@ -308,6 +334,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
         atomicStore(&climbing, 0u);
         atomicStore(&queue_len, 0u);
     }
+    build_subset_table(lid);
     workgroupBarrier();
     if j < n {
         atomicStore(&prim_counts[node], 1u);

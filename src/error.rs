@@ -27,6 +27,8 @@ pub enum Error {
     Gpu(String),
     #[error("invalid argument: {0}")]
     InvalidArgument(String),
+    #[error("cannot write {path}: {message}")]
+    Write { path: PathBuf, message: String },
 }
 
 pub type Result<T> = std::result::Result<T, Error>;

@@ -3,8 +3,11 @@
 //!
 //! Layout: `geometry` (boxes, rays, triangle tests), `scene` (OBJ, procedural scenes, registry),
 //! `bvh` (node layout, CPU reference builders, SAH, validation), `gpu` (device, timing, shaders),
-//! `trace` (camera, GPU path tracer and closest-hit queries).
+//! `trace` (camera, GPU path tracer and closest-hit queries), `tradeoff` (build time against ray
+//! throughput: the frame-time model, measurements and charts), `anim` (animated scenes: per-frame
+//! GPU animation, rebuilds and refits).
 
+pub mod anim;
 pub mod app;
 pub mod bvh;
 pub mod error;
@@ -14,5 +17,6 @@ pub mod gpu;
 pub mod scene;
 pub mod sort;
 pub mod trace;
+pub mod tradeoff;
 
 pub use error::{Error, Result};

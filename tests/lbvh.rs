@@ -9,7 +9,7 @@ use glam::Vec3;
 use rand::Rng;
 use treelet::bvh::lbvh::{
     assemble_lbvh_cpu, build_lbvh_cpu, centroid_bounds_cpu, hierarchy_cpu, morton_keys_cpu,
-    LbvhBuilder,
+    prim_boxes_cpu, LbvhBuilder,
 };
 use treelet::bvh::validate;
 use treelet::scene::{load_scene, Camera, Material, Scene, Triangle};
@@ -36,9 +36,10 @@ fn check_stages_equal_cpu(triangles: Vec<Triangle>) {
     let mut builder = LbvhBuilder::new(gpu());
     let stages = builder.build_stages(gpu(), &mut gpu_scene).unwrap();
 
-    let bounds = centroid_bounds_cpu(tris);
+    let boxes = prim_boxes_cpu(tris);
+    let bounds = centroid_bounds_cpu(&boxes);
     assert_eq!(stages.centroid_bounds, bounds, "centroid bounds");
-    assert_eq!(stages.keys, morton_keys_cpu(tris, &bounds), "morton keys");
+    assert_eq!(stages.keys, morton_keys_cpu(&boxes, &bounds), "morton keys");
     let mut pairs: Vec<(u64, u32)> = stages.keys.iter().copied().zip(0..).collect();
     pairs.sort_unstable();
     let (sorted_keys, sorted_prims): (Vec<u64>, Vec<u32>) = pairs.into_iter().unzip();
@@ -52,7 +53,7 @@ fn check_stages_equal_cpu(triangles: Vec<Triangle>) {
             "parent links"
         );
     }
-    let expected = assemble_lbvh_cpu(tris, &hierarchy, &sorted_prims);
+    let expected = assemble_lbvh_cpu(&boxes, &hierarchy, &sorted_prims);
     assert_eq!(
         bytemuck::cast_slice::<_, u8>(&stages.bvh.nodes),
         bytemuck::cast_slice::<_, u8>(&expected.nodes),

@@ -133,6 +133,7 @@ fn dp_equals_brute_force_on_gpu() {
                 builder.settings = TreeletSettings {
                     treelet_size: m,
                     rounds: 1,
+                    split_percent: 0,
                 };
                 builder.sah = SahParams {
                     max_leaf_size,
@@ -227,6 +228,7 @@ fn gpu_optimizer_equals_cpu_twin() {
         TreeletSettings {
             treelet_size: 7,
             rounds: 0,
+            split_percent: 0,
         },
         SahParams {
             max_leaf_size: 4,

@@ -8,15 +8,3 @@ struct Aabb {
 }
 
 const F32_MAX: f32 = 3.40282347e38;
-
-fn empty_aabb() -> Aabb {
-    return Aabb(vec3<f32>(F32_MAX), 0u, vec3<f32>(-F32_MAX), 0u);
-}
-
-fn triangle_min(t: Triangle) -> vec3<f32> {
-    return min(t.v0, min(t.v1, t.v2));
-}
-
-fn triangle_max(t: Triangle) -> vec3<f32> {
-    return max(t.v0, max(t.v1, t.v2));
-}

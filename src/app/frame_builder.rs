@@ -1,10 +1,12 @@
-//! (Re)building the viewed scene's BVH. GPU builders rebuild in place (`GpuBuilder`: pipelines and
-//! scratch reused, geometry already on the GPU): the per-frame path. CPU reference builders go
-//! through `Builder::build` (build + upload) once per change.
+//! (Re)building the viewed scene's BVH. GPU builders rebuild in place (`TreeUpdater`: pipelines
+//! and scratch reused, geometry already on the GPU): the per-frame path; the refit modes build the
+//! first frame's tree and then only refit its boxes. CPU reference builders go through
+//! `Builder::build` (build + upload) once per change.
 
 use std::time::Instant;
 
-use crate::bvh::{Builder, GpuBuilder, SahParams};
+use crate::anim::{TreeUpdater, UpdateMode};
+use crate::bvh::{Builder, SahParams};
 use crate::gpu::{aggregate_stages, GpuContext, StageTime};
 use crate::scene::Scene;
 use crate::trace::GpuScene;
@@ -20,26 +22,46 @@ pub struct BuildTiming {
     pub timestamped: bool,
 }
 
+impl BuildTiming {
+    /// The timing of GPU `stages` that took `wall_ms` on the wall clock.
+    pub fn from_stages(stages: Vec<StageTime>, wall_ms: f64) -> Self {
+        let gpu_ms: Option<f64> = stages.iter().map(|s| s.ms).sum();
+        Self {
+            stages: aggregate_stages(stages),
+            total_ms: gpu_ms.unwrap_or(wall_ms),
+            timestamped: gpu_ms.is_some(),
+        }
+    }
+}
+
 pub enum FrameBuilder {
-    /// A GPU builder, rebuilding in place into the scene's node buffers.
-    InPlace(Builder, GpuBuilder),
+    /// A GPU rebuild or refit, in place in the scene's node buffers.
+    InPlace(UpdateMode, TreeUpdater),
     /// A CPU reference builder, run through `Builder::build`.
     Full(Builder),
 }
 
 impl FrameBuilder {
-    pub fn new(ctx: &GpuContext, builder: Builder) -> Result<Self> {
-        if builder.is_gpu() {
-            let gpu = GpuBuilder::new(ctx, builder, &SahParams::default())?;
-            Ok(FrameBuilder::InPlace(builder, gpu))
+    pub fn new(ctx: &GpuContext, mode: UpdateMode) -> Result<Self> {
+        if mode.is_gpu() {
+            let updater = TreeUpdater::new(ctx, mode, &SahParams::default())?;
+            Ok(FrameBuilder::InPlace(mode, updater))
         } else {
-            Ok(FrameBuilder::Full(builder))
+            Ok(FrameBuilder::Full(mode.builder()))
         }
     }
 
-    pub fn builder(&self) -> Builder {
+    pub fn builder(&self) -> UpdateMode {
         match self {
-            FrameBuilder::InPlace(builder, _) | FrameBuilder::Full(builder) => *builder,
+            FrameBuilder::InPlace(mode, _) => *mode,
+            FrameBuilder::Full(builder) => UpdateMode::Rebuild(*builder),
+        }
+    }
+
+    /// Refit modes: build a new tree at the next build (after a setting changed).
+    pub fn reset_topology(&mut self) {
+        if let FrameBuilder::InPlace(_, updater) = self {
+            updater.reset();
         }
     }
 
@@ -53,17 +75,14 @@ impl FrameBuilder {
         gpu_scene: &mut GpuScene,
     ) -> Result<BuildTiming> {
         match self {
-            FrameBuilder::InPlace(_, builder) => {
+            FrameBuilder::InPlace(_, updater) => {
                 let start = Instant::now();
-                builder.set_sah_params(*params);
-                let stages = builder.build(ctx, gpu_scene)?;
-                let wall_ms = start.elapsed().as_secs_f64() * 1e3;
-                let gpu_ms: Option<f64> = stages.iter().map(|s| s.ms).sum();
-                Ok(BuildTiming {
-                    stages: aggregate_stages(stages),
-                    total_ms: gpu_ms.unwrap_or(wall_ms),
-                    timestamped: gpu_ms.is_some(),
-                })
+                updater.set_sah_params(*params);
+                let stages = updater.update(ctx, gpu_scene)?;
+                Ok(BuildTiming::from_stages(
+                    stages,
+                    start.elapsed().as_secs_f64() * 1e3,
+                ))
             }
             FrameBuilder::Full(builder) => {
                 let (built, report) = builder.build(ctx, scene, params, 1)?;

@@ -3,14 +3,15 @@
 
 use std::path::PathBuf;
 
-use crate::bvh::Builder;
+use crate::anim::UpdateMode;
 use crate::gpu::GpuOptions;
 
 #[derive(Clone, Debug)]
 pub struct ViewerOptions {
-    /// Scene name (see the registry) or path to an OBJ file.
+    /// Scene name (see the scene and animation registries), path to an OBJ file, or a folder of
+    /// frame OBJs (an OBJ sequence).
     pub scene: String,
-    pub builder: Builder,
+    pub builder: UpdateMode,
     pub gpu: GpuOptions,
     /// Inner size of the window in physical pixels.
     pub window_size: (u32, u32),

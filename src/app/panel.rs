@@ -1,13 +1,18 @@
 //! The egui side panel: device, performance (frame time plot, Mrays/s), scene and tree statistics,
-//! per-stage build times, SAH against the CPU sweep reference, and the controls (scene, builder,
-//! leaf size, samples per frame, bounces, per-frame rebuild, camera reset, screenshot). It only
-//! edits `PanelControls` and returns `PanelActions`; the viewer applies them.
+//! animation playback (play/pause/step/speed/seek, animate time, the SAH-over-time plot of rebuild
+//! versus refit), per-stage build times, SAH against the CPU sweep reference, and the controls
+//! (scene, builder or refit, leaf size, samples per frame, bounces, per-frame rebuild, camera reset,
+//! screenshot). It only edits `PanelControls` and returns `PanelActions`; the viewer applies them.
 
 use egui::{Color32, RichText};
 
+use super::frame_builder::BuildTiming;
+use super::playback::{Clock, ClockRequest, Playback};
+use super::sah_history::SahHistory;
 use super::sah_reference::ReferenceState;
 use super::settings::ViewSettings;
 use super::stats::FrameStats;
+use crate::anim::{AnimateStage, UpdateMode, ANIMATIONS};
 use crate::bvh::Builder;
 use crate::scene::SCENES;
 
@@ -31,6 +36,19 @@ pub struct PanelInfo<'a> {
     pub reference: ReferenceState,
     pub error: Option<&'a str>,
     pub screenshot: Option<&'a str>,
+    /// The animation of an animated scene.
+    pub animation: Option<AnimationInfo<'a>>,
+}
+
+/// Read-only facts about the animation of an animated scene.
+pub struct AnimationInfo<'a> {
+    pub clock: Clock,
+    pub stage: AnimateStage,
+    /// The last animate stage.
+    pub animate_ms: Option<f64>,
+    /// The last update of the comparison tree.
+    pub companion: Option<&'a BuildTiming>,
+    pub history: &'a SahHistory,
 }
 
 /// What the panel's widgets edit directly.
@@ -38,6 +56,7 @@ pub struct PanelControls {
     pub settings: ViewSettings,
     /// Contents of the "OBJ path" text field.
     pub obj_path: String,
+    pub playback: Playback,
 }
 
 /// What the user asked for this frame.
@@ -47,6 +66,8 @@ pub struct PanelActions {
     pub load_scene: Option<String>,
     pub reset_camera: bool,
     pub screenshot: bool,
+    /// Animation clock: single step or seek.
+    pub clock: ClockRequest,
 }
 
 /// Draws the panel at the left of `ui`.
@@ -67,6 +88,9 @@ pub fn show(ui: &mut egui::Ui, info: &PanelInfo, controls: &mut PanelControls) -
                     device(ui, info);
                     performance(ui, info);
                     scene(ui, info, controls, &mut actions);
+                    if let Some(animation) = &info.animation {
+                        self::animation(ui, animation, &mut controls.playback, &mut actions);
+                    }
                     bvh(ui, info, &mut controls.settings);
                     render(ui, &mut controls.settings, &mut actions, info);
                 });
@@ -155,19 +179,26 @@ fn scene(
         .width(PANEL_WIDTH - 40.0)
         .selected_text(info.scene_name)
         .show_ui(ui, |ui| {
-            for entry in SCENES {
+            let animated = ANIMATIONS.iter().map(|e| (e.name, e.description, true));
+            let entries = SCENES.iter().map(|e| (e.name, e.description, false));
+            for (name, description, is_animated) in animated.chain(entries) {
+                let label = if is_animated {
+                    format!("{name} (animated)")
+                } else {
+                    name.to_string()
+                };
                 let picked = ui
-                    .selectable_label(entry.name == info.scene_name, entry.name)
-                    .on_hover_text(entry.description);
-                if picked.clicked() && entry.name != info.scene_name {
-                    actions.load_scene = Some(entry.name.to_string());
+                    .selectable_label(name == info.scene_name, label)
+                    .on_hover_text(description);
+                if picked.clicked() && name != info.scene_name {
+                    actions.load_scene = Some(name.to_string());
                 }
             }
         });
     ui.horizontal(|ui| {
         let field = ui.add(
             egui::TextEdit::singleline(&mut controls.obj_path)
-                .hint_text("path/to/scene.obj")
+                .hint_text("path/to/scene.obj or frames folder")
                 .desired_width(PANEL_WIDTH - 90.0),
         );
         let entered = field.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
@@ -187,12 +218,30 @@ fn scene(
 fn bvh(ui: &mut egui::Ui, info: &PanelInfo, settings: &mut ViewSettings) {
     section(ui, "BVH");
     let mut builder = settings.builder;
+    // Animated scenes: GPU rebuilds and the refits (CPU builders would need CPU triangles).
+    let modes: Vec<UpdateMode> = if info.animation.is_some() {
+        UpdateMode::all()
+            .into_iter()
+            .filter(|m| m.is_gpu())
+            .collect()
+    } else {
+        Builder::ALL
+            .iter()
+            .map(|&b| UpdateMode::Rebuild(b))
+            .collect()
+    };
     egui::ComboBox::from_label("builder")
         .selected_text(builder.name())
         .show_ui(ui, |ui| {
-            for &b in Builder::ALL {
-                let kind = if b.is_gpu() { "GPU" } else { "CPU reference" };
-                ui.selectable_value(&mut builder, b, format!("{} ({kind})", b.name()));
+            for m in modes {
+                let kind = if m.is_refit() {
+                    "GPU refit of the first frame's tree"
+                } else if m.is_gpu() {
+                    "GPU"
+                } else {
+                    "CPU reference"
+                };
+                ui.selectable_value(&mut builder, m, format!("{} ({kind})", m.name()));
             }
         });
     settings.select_builder(builder);
@@ -207,6 +256,100 @@ fn bvh(ui: &mut egui::Ui, info: &PanelInfo, settings: &mut ViewSettings) {
     );
     build_times(ui, info.stats, settings.rebuilds_every_frame());
     sah(ui, info);
+}
+
+fn animation(
+    ui: &mut egui::Ui,
+    info: &AnimationInfo,
+    playback: &mut Playback,
+    actions: &mut PanelActions,
+) {
+    section(ui, "Animation");
+    let clock = info.clock;
+    let range = clock.range;
+    ui.label(format!(
+        "t = {:.2} in {:.2}..{:.2} · frame {} of {}",
+        clock.t(),
+        range.start,
+        range.end,
+        range.frame_at(clock.t()),
+        range.frames
+    ));
+    ui.horizontal(|ui| {
+        let play = if playback.playing { "Pause" } else { "Play" };
+        if ui.button(play).clicked() {
+            playback.playing = !playback.playing;
+        }
+        if ui.button("Step").clicked() {
+            actions.clock.step = true;
+        }
+    });
+    let speed_unit = if playback.real_time {
+        "× real time"
+    } else {
+        "frames per frame"
+    };
+    ui.add(
+        egui::Slider::new(
+            &mut playback.speed,
+            Playback::MIN_SPEED..=Playback::MAX_SPEED,
+        )
+        .logarithmic(true)
+        .text(speed_unit),
+    );
+    let mut t = clock.t();
+    if ui
+        .add(egui::Slider::new(&mut t, range.start..=range.end).text("time"))
+        .changed()
+    {
+        actions.clock.seek = Some(t);
+    }
+    ui.checkbox(&mut playback.real_time, "real time")
+        .on_hover_text("Off: every displayed frame advances one animation frame (× speed)");
+    ui.checkbox(&mut playback.follow_camera, "animated camera")
+        .on_hover_text("Moving the camera turns this off");
+    let animate = info
+        .animate_ms
+        .map_or("–".into(), |ms| format!("{ms:.2} ms"));
+    ui.label(format!("animate: {animate} ({})", info.stage.describe()));
+    ui.checkbox(&mut playback.compare, "compare rebuild and refit")
+        .on_hover_text(
+            "Keeps a second tree (the refit when the traced tree is rebuilt, the rebuild when it \
+             is refitted), updates it every animated frame and downloads both trees for their SAH \
+             (the plot). Refits start from the first frame of each loop.",
+        );
+    if let Some(timing) = info.companion {
+        ui.label(format!("second tree: {:.2} ms", timing.total_ms));
+    }
+    let (rebuild, refit) = info.history.series();
+    let (rebuild_label, refit_label) = &info.history.labels;
+    egui_plot::Plot::new("sah_over_time")
+        .height(130.0)
+        .legend(egui_plot::Legend::default())
+        .allow_zoom(false)
+        .allow_drag(false)
+        .allow_scroll(false)
+        .include_x(f64::from(range.start))
+        .include_x(f64::from(range.end))
+        .include_y(0.0)
+        .x_axis_label("t")
+        .y_axis_label("SAH")
+        .show(ui, |plot| {
+            plot.line(egui_plot::Line::new(
+                rebuild_label.as_str(),
+                egui_plot::PlotPoints::from(rebuild),
+            ));
+            plot.line(egui_plot::Line::new(
+                refit_label.as_str(),
+                egui_plot::PlotPoints::from(refit),
+            ));
+        });
+    if let Some(last) = info.history.last() {
+        ui.label(format!(
+            "SAH at t = {:.2}: rebuild {:.1}, refit {:.1}",
+            last.t, last.rebuild, last.refit
+        ));
+    }
 }
 
 fn build_times(ui: &mut egui::Ui, stats: &FrameStats, per_frame: bool) {

@@ -1,11 +1,13 @@
-//! The viewer's user-adjustable settings (builder, leaf size, samples per frame, bounces, per-frame
-//! rebuild). Any change to them restarts accumulation.
+//! The viewer's user-adjustable settings (builder or refit mode, leaf size, samples per frame,
+//! bounces, per-frame rebuild). Any change to them restarts accumulation.
 
-use crate::bvh::{Builder, SahParams};
+use crate::anim::UpdateMode;
+use crate::bvh::SahParams;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ViewSettings {
-    pub builder: Builder,
+    /// How the tree is built: a builder rebuilding it, or a refit of the first frame's tree.
+    pub builder: UpdateMode,
     pub max_leaf_size: u32,
     pub samples_per_frame: u32,
     /// Diffuse bounces after the primary hit (the tracer's `max_depth` is this + 1).
@@ -19,7 +21,7 @@ impl ViewSettings {
     pub const MAX_BOUNCES: u32 = 16;
     pub const MAX_LEAF_SIZE: u32 = 32;
 
-    pub fn new(builder: Builder) -> Self {
+    pub fn new(builder: UpdateMode) -> Self {
         Self {
             builder,
             max_leaf_size: SahParams::default().max_leaf_size,
@@ -47,7 +49,7 @@ impl ViewSettings {
     }
 
     /// Switches builder; per-frame rebuilding defaults to on for GPU builders, off for CPU ones.
-    pub fn select_builder(&mut self, builder: Builder) {
+    pub fn select_builder(&mut self, builder: UpdateMode) {
         if builder != self.builder {
             self.builder = builder;
             self.rebuild_every_frame = builder.is_gpu();
@@ -58,25 +60,26 @@ impl ViewSettings {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::bvh::Builder;
 
     #[test]
     fn gpu_builders_rebuild_every_frame_by_default_cpu_ones_do_not() {
-        let mut s = ViewSettings::new(Builder::Lbvh);
+        let mut s = ViewSettings::new(UpdateMode::Rebuild(Builder::Lbvh));
         assert!(s.rebuilds_every_frame());
-        s.select_builder(Builder::Sweep);
+        s.select_builder(UpdateMode::Rebuild(Builder::Sweep));
         assert!(!s.rebuilds_every_frame());
         s.rebuild_every_frame = true;
         assert!(
             !s.rebuilds_every_frame(),
             "a CPU builder never rebuilds per frame"
         );
-        s.select_builder(Builder::Lbvh);
-        assert!(s.rebuilds_every_frame());
+        s.select_builder(UpdateMode::Refit(Builder::Lbvh));
+        assert!(s.rebuilds_every_frame(), "a refit runs on the GPU");
     }
 
     #[test]
     fn bounces_map_to_rays_per_path() {
-        let mut s = ViewSettings::new(Builder::Lbvh);
+        let mut s = ViewSettings::new(UpdateMode::Rebuild(Builder::Lbvh));
         s.max_bounces = 0;
         assert_eq!(s.max_depth(), 1);
     }

@@ -5,22 +5,27 @@
 //! ```
 //!
 //! Accumulation goes on while nothing changes and restarts on any change (camera, settings, scene,
-//! window size). User errors (an unloadable file, a scene too large for the device) are shown in
+//! window size, and every animated frame). Animated scenes (`crate::anim`) move their triangles on
+//! the GPU in the animate step (`animated_scene`), then the tree is rebuilt (or refitted) in place. User errors (an unloadable file, a scene too large for the device) are shown in
 //! the panel; the previous scene stays and the viewer keeps running. Displaying the image and the
 //! panel is `window_app`'s part.
 
 use std::sync::Arc;
 use std::time::Instant;
 
+use super::animated_scene::AnimatedScene;
 use super::camera_control::CameraInput;
 use super::display::PixelRect;
 use super::frame_builder::{BuildTiming, FrameBuilder};
 use super::options::ViewerOptions;
-use super::panel::{self, PanelActions, PanelControls, PanelInfo, SAH_INTERVAL_S};
+use super::panel::{self, AnimationInfo, PanelActions, PanelControls, PanelInfo, SAH_INTERVAL_S};
+use super::playback::{ClockRequest, Playback};
 use super::sah_reference::{ReferenceKey, SahReference};
 use super::settings::ViewSettings;
 use super::stats::{FrameStats, TreeSah};
-use crate::bvh::sah_cost;
+use super::tradeoff_panel::{StudyScene, TradeoffPanel};
+use crate::anim::{is_animation, load_animation, UpdateMode};
+use crate::bvh::{sah_cost, Builder};
 use crate::gpu::GpuContext;
 use crate::scene::{load_scene, Camera, Scene};
 use crate::trace::{GpuScene, PathTracer, RenderSettings};
@@ -58,12 +63,17 @@ pub struct Viewer {
     reference: SahReference,
     error: Option<String>,
     screenshot_message: Option<String>,
+    tradeoff: TradeoffPanel,
+    /// The animation of an animated scene (None for static scenes).
+    animated: Option<AnimatedScene>,
+    /// The triangles or the tree changed since the rebuild-versus-refit comparison last ran.
+    compare_due: bool,
 }
 
 impl Viewer {
     /// Loads and builds the first scene; errors here end the program (bad command line).
     pub fn new(ctx: &GpuContext, options: &ViewerOptions) -> Result<Self> {
-        let settings = ViewSettings::new(options.builder);
+        let settings = ViewSettings::new(mode_for_scene(&options.scene, options.builder));
         let mut builder = FrameBuilder::new(ctx, settings.builder)?;
         let loaded = load_and_build(ctx, &options.scene, &mut builder, &settings)?;
         let mut viewer = Self {
@@ -79,6 +89,7 @@ impl Viewer {
             controls: PanelControls {
                 settings,
                 obj_path: String::new(),
+                playback: Playback::default(),
             },
             applied: settings,
             restart_accumulation: true,
@@ -88,6 +99,9 @@ impl Viewer {
             reference: SahReference::default(),
             error: None,
             screenshot_message: None,
+            tradeoff: TradeoffPanel::default(),
+            animated: loaded.animated,
+            compare_due: true,
         };
         viewer.stats.build = Some(loaded.timing);
         viewer.request_reference();
@@ -119,13 +133,22 @@ impl Viewer {
             reference: self.reference.state(),
             error: self.error.as_deref(),
             screenshot: self.screenshot_message.as_deref(),
+            animation: self.animated.as_ref().map(|a| AnimationInfo {
+                clock: a.clock,
+                stage: a.stage(),
+                animate_ms: a.animate_time.as_ref().and_then(|s| s.ms),
+                companion: a.companion_timing.as_ref(),
+                history: &a.history,
+            }),
         };
         let actions = panel::show(ui, &info, &mut self.controls);
+        self.tradeoff.show(ui.ctx());
         egui::CentralPanel::no_frame().show(ui, |ui| {
             let (rect, response) =
                 ui.allocate_exact_size(ui.available_size(), egui::Sense::click_and_drag());
             self.image_rect = PixelRect::from_points(rect, ui.ctx().pixels_per_point(), target);
             if CameraInput::read(ui, &response).apply(&mut self.camera, self.scene_radius) {
+                self.controls.playback.follow_camera = false;
                 self.something_changed();
             }
         });
@@ -148,20 +171,88 @@ impl Viewer {
         if self.halted {
             return;
         }
-        if self.animate() {
+        if self.animate(ctx, actions.clock) {
             self.tree_dirty = true;
             self.restart_accumulation = true;
         }
         self.build(ctx);
+        self.compare(ctx);
         self.measure_sah(ctx);
         self.trace(ctx);
+        let study = StudyScene {
+            scene: &self.scene,
+            scene_id: self.scene_id,
+            camera: &self.camera,
+            max_depth: self.applied.max_depth(),
+            sah: self.applied.sah_params(),
+        };
+        self.tradeoff.step(ctx, &study);
     }
 
-    /// The animation step of the frame loop. Every scene is static so far: nothing moves and
-    /// this returns false. Animated scenes will update their vertices on the GPU here and return
-    /// true, which rebuilds the tree and restarts accumulation.
-    fn animate(&mut self) -> bool {
-        false
+    /// The animation step of the frame loop: advances the clock of an animated scene and moves its
+    /// triangles on the GPU. Returns whether they moved (the tree is then rebuilt or refitted and
+    /// accumulation restarts). Static scenes never move.
+    fn animate(&mut self, ctx: &GpuContext, request: ClockRequest) -> bool {
+        let Some(animated) = self.animated.as_mut() else {
+            return false;
+        };
+        let dt = self
+            .stats
+            .history
+            .back()
+            .map_or(0.0, |ms| (ms * 1e-3) as f32);
+        let playback = &mut self.controls.playback;
+        match animated.step(ctx, playback, request, dt, &mut self.gpu_scene) {
+            Ok(stepped) => {
+                if stepped.looped {
+                    // Refits start over from the first frame of each loop.
+                    self.builder.reset_topology();
+                }
+                if stepped.moved {
+                    if playback.follow_camera {
+                        self.camera = animated.camera();
+                    }
+                    self.compare_due = true;
+                }
+                stepped.moved
+            }
+            Err(e) => {
+                self.error = Some(format!("animation failed: {e}"));
+                self.halted = true;
+                false
+            }
+        }
+    }
+
+    /// Animated scenes with the comparison on: after the traced tree was updated, updates the
+    /// second tree and records both SAH costs for the plot (this also measures the traced tree).
+    fn compare(&mut self, ctx: &GpuContext) {
+        let Some(animated) = self.animated.as_mut() else {
+            return;
+        };
+        if !self.controls.playback.compare {
+            animated.drop_companion();
+            return;
+        }
+        if !self.compare_due {
+            return;
+        }
+        self.compare_due = false;
+        let params = self.applied.sah_params();
+        match animated.compare(ctx, self.applied.builder, &self.gpu_scene, &params) {
+            Ok((cost, leaves)) => {
+                self.stats.tree_sah = Some(TreeSah {
+                    cost,
+                    leaves,
+                    measured: Instant::now(),
+                });
+                self.sah_due = SahDue::No;
+            }
+            Err(e) => {
+                self.error = Some(format!("rebuild/refit comparison failed: {e}"));
+                self.controls.playback.compare = false;
+            }
+        }
     }
 
     /// Records the tonemap of the accumulated image (for `image`) into `encoder`.
@@ -223,6 +314,20 @@ impl Viewer {
 
     fn load(&mut self, ctx: &GpuContext, name: &str) {
         self.error = None;
+        let mode = mode_for_scene(name, self.applied.builder);
+        if mode != self.applied.builder {
+            match FrameBuilder::new(ctx, mode) {
+                Ok(builder) => {
+                    self.builder = builder;
+                    self.applied.select_builder(mode);
+                    self.controls.settings.select_builder(mode);
+                }
+                Err(e) => {
+                    self.error = Some(format!("cannot load '{name}': {e}"));
+                    return;
+                }
+            }
+        }
         match load_and_build(ctx, name, &mut self.builder, &self.applied) {
             Ok(loaded) => {
                 log::info!(
@@ -239,6 +344,9 @@ impl Viewer {
                 self.stats.tree_sah = None;
                 self.tree_dirty = false;
                 self.sah_due = SahDue::Now;
+                self.animated = loaded.animated;
+                self.compare_due = true;
+                self.controls.playback.follow_camera = true;
                 self.request_reference();
                 self.something_changed();
             }
@@ -270,6 +378,7 @@ impl Viewer {
         }
         if wanted.max_leaf_size != self.applied.max_leaf_size {
             self.tree_dirty = true;
+            self.builder.reset_topology();
         }
         self.applied = wanted;
         self.request_reference();
@@ -409,25 +518,46 @@ impl SahDue {
 
 /// A freshly loaded scene, on the GPU with its first tree.
 struct LoadedScene {
+    /// A static scene, or an animated one at its start time.
     scene: Arc<Scene>,
     gpu_scene: GpuScene,
     timing: BuildTiming,
+    animated: Option<AnimatedScene>,
 }
 
-/// Loads `name`, uploads it and builds its tree with `builder`.
+/// The tree update to use for scene `name`: animated scenes need a GPU mode (CPU reference builders
+/// fall back to LBVH), static scenes have nothing to refit (a refit mode falls back to a rebuild
+/// with its builder).
+fn mode_for_scene(name: &str, mode: UpdateMode) -> UpdateMode {
+    match (is_animation(name), mode) {
+        (true, m) if !m.is_gpu() => UpdateMode::Rebuild(Builder::Lbvh),
+        (false, UpdateMode::Refit(b)) => UpdateMode::Rebuild(b),
+        (_, m) => m,
+    }
+}
+
+/// Loads `name` (a static or an animated scene), uploads it and builds its tree with `builder`.
 fn load_and_build(
     ctx: &GpuContext,
     name: &str,
     builder: &mut FrameBuilder,
     settings: &ViewSettings,
 ) -> Result<LoadedScene> {
-    let scene = Arc::new(load_scene(name)?);
+    let (scene, animated) = if is_animation(name) {
+        let animation = load_animation(name)?;
+        let scene = animation.scene_at(animation.time_range().start);
+        (scene, Some(AnimatedScene::new(animation)))
+    } else {
+        (load_scene(name)?, None)
+    };
+    let scene = Arc::new(scene);
     let mut gpu_scene = GpuScene::upload_geometry(ctx, &scene, 1, 1)?;
     let timing = builder.build(ctx, &scene, &settings.sah_params(), &mut gpu_scene)?;
     Ok(LoadedScene {
         scene,
         gpu_scene,
         timing,
+        animated,
     })
 }
 

@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use super::lbvh::LbvhBuilder;
 use super::treelet::{TrbvhBuilder, TreeletSettings};
-use super::{build_sweep_sah, SahParams};
+use super::{build_sbvh, build_sweep_sah, Bvh, SahParams};
 use crate::gpu::{GpuContext, StageTime};
 use crate::scene::Scene;
 use crate::trace::GpuScene;
@@ -16,11 +16,19 @@ use crate::{Error, Result};
 pub enum Builder {
     /// CPU full-sweep SAH (greedy top-down): the quality reference.
     Sweep,
+    /// CPU SBVH (Stich et al. 2009): object + spatial splits, the reference for split-aware
+    /// builders; a triangle may be referenced by several leaves.
+    Sbvh,
     /// GPU LBVH (Karras 2012): Morton order, one primitive per leaf.
     Lbvh,
     /// GPU TRBVH (Karras & Aila 2013): LBVH + treelet restructuring rounds + leaf collapse.
     Trbvh(TreeletSettings),
+    /// GPU TRBVH over pre-split triangles (paper §5; `split_percent` of the settings).
+    TrbvhSplit(TreeletSettings),
 }
+
+/// The pre-splitting budget of `trbvh-split` when none is given: β = 0.3, as in the paper.
+pub const DEFAULT_SPLIT_PERCENT: u32 = 30;
 
 /// Build timings. For GPU builders `build_ms` is the sum of the GPU stage times (timestamp
 /// queries; wall-clock time where the device has none); for CPU builders it is CPU time.
@@ -34,28 +42,60 @@ pub struct BuildReport {
 impl Builder {
     pub const ALL: &[Builder] = &[
         Builder::Sweep,
+        Builder::Sbvh,
         Builder::Lbvh,
         Builder::Trbvh(TreeletSettings::BALANCED),
+        Builder::TrbvhSplit(TreeletSettings {
+            split_percent: DEFAULT_SPLIT_PERCENT,
+            ..TreeletSettings::BALANCED
+        }),
     ];
 
     pub fn name(self) -> &'static str {
         match self {
             Builder::Sweep => "sweep",
+            Builder::Sbvh => "sbvh",
             Builder::Lbvh => "lbvh",
             Builder::Trbvh(_) => "trbvh",
+            Builder::TrbvhSplit(_) => "trbvh-split",
         }
     }
 
     /// Whether the builder runs on the GPU (the per-frame path) rather than as a CPU reference.
     pub fn is_gpu(self) -> bool {
-        matches!(self, Builder::Lbvh | Builder::Trbvh(_))
+        matches!(
+            self,
+            Builder::Lbvh | Builder::Trbvh(_) | Builder::TrbvhSplit(_)
+        )
     }
 
-    /// The same builder with other treelet settings (no effect on builders without treelets).
+    /// Whether the builder may reference a triangle from several leaves (spatial splits): its
+    /// trees are checked with [`super::validate_with_references`] instead of [`super::validate`].
+    pub fn duplicates_references(self) -> bool {
+        matches!(self, Builder::Sbvh)
+    }
+
+    /// The same builder with other treelet settings (no effect on builders without treelets;
+    /// `trbvh` never splits, `trbvh-split` always does).
     pub fn with_treelet_settings(self, settings: TreeletSettings) -> Self {
         match self {
-            Builder::Trbvh(_) => Builder::Trbvh(settings),
+            Builder::Trbvh(_) => Builder::Trbvh(TreeletSettings {
+                split_percent: 0,
+                ..settings
+            }),
+            Builder::TrbvhSplit(_) => Builder::TrbvhSplit(TreeletSettings {
+                split_percent: settings.split_percent.max(1),
+                ..settings
+            }),
             other => other,
+        }
+    }
+
+    /// The treelet settings of treelet builders.
+    pub fn treelet_settings(self) -> Option<TreeletSettings> {
+        match self {
+            Builder::Trbvh(s) | Builder::TrbvhSplit(s) => Some(s),
+            _ => None,
         }
     }
 
@@ -63,6 +103,12 @@ impl Builder {
     pub fn label(self) -> String {
         match self {
             Builder::Trbvh(s) => format!("trbvh n={} r={}", s.treelet_size, s.rounds),
+            Builder::TrbvhSplit(s) => format!(
+                "trbvh-split n={} r={} b={:.2}",
+                s.treelet_size,
+                s.rounds,
+                f64::from(s.split_percent) / 100.0
+            ),
             other => other.name().to_string(),
         }
     }
@@ -92,22 +138,13 @@ impl Builder {
         repeats: u32,
     ) -> Result<(GpuScene, BuildReport)> {
         match self {
-            Builder::Sweep => {
-                let start = Instant::now();
-                let bvh = build_sweep_sah(&scene.triangles, params);
-                let build_ms = start.elapsed().as_secs_f64() * 1e3;
-                let gpu_scene = GpuScene::upload(ctx, scene, &bvh)?;
-                let report = BuildReport {
-                    build_ms,
-                    wall_ms: build_ms,
-                    stages: vec![StageTime {
-                        label: "cpu sweep".into(),
-                        ms: Some(build_ms),
-                    }],
-                };
-                Ok((gpu_scene, report))
-            }
-            Builder::Lbvh | Builder::Trbvh(_) => {
+            Builder::Sweep => cpu_build(ctx, scene, "cpu sweep", || {
+                build_sweep_sah(&scene.triangles, params)
+            }),
+            Builder::Sbvh => cpu_build(ctx, scene, "cpu sbvh", || {
+                build_sbvh(&scene.triangles, params)
+            }),
+            Builder::Lbvh | Builder::Trbvh(_) | Builder::TrbvhSplit(_) => {
                 let mut gpu_scene = GpuScene::upload_geometry(ctx, scene, 1, 1)?;
                 let mut builder = GpuBuilder::new(ctx, self, params)?;
                 builder.build(ctx, &mut gpu_scene)?;
@@ -134,6 +171,28 @@ impl Builder {
     }
 }
 
+/// Runs a CPU builder once (timed, CPU time) and uploads its tree.
+fn cpu_build(
+    ctx: &GpuContext,
+    scene: &Scene,
+    label: &str,
+    build: impl FnOnce() -> Bvh,
+) -> Result<(GpuScene, BuildReport)> {
+    let start = Instant::now();
+    let bvh = build();
+    let build_ms = start.elapsed().as_secs_f64() * 1e3;
+    let gpu_scene = GpuScene::upload(ctx, scene, &bvh)?;
+    let report = BuildReport {
+        build_ms,
+        wall_ms: build_ms,
+        stages: vec![StageTime {
+            label: label.into(),
+            ms: Some(build_ms),
+        }],
+    };
+    Ok((gpu_scene, report))
+}
+
 /// A GPU builder ready to rebuild a scene's tree every frame.
 pub enum GpuBuilder {
     Lbvh(Box<LbvhBuilder>),
@@ -145,12 +204,13 @@ impl GpuBuilder {
     pub fn new(ctx: &GpuContext, builder: Builder, params: &SahParams) -> Result<Self> {
         match builder {
             Builder::Lbvh => Ok(Self::Lbvh(Box::new(LbvhBuilder::new(ctx)))),
-            Builder::Trbvh(settings) => Ok(Self::Trbvh(Box::new(TrbvhBuilder::new(
-                ctx, settings, *params,
-            )?))),
-            Builder::Sweep => Err(Error::InvalidArgument(
-                "sweep is a CPU reference builder, not a GPU builder".into(),
-            )),
+            Builder::Trbvh(settings) | Builder::TrbvhSplit(settings) => Ok(Self::Trbvh(Box::new(
+                TrbvhBuilder::new(ctx, settings, *params)?,
+            ))),
+            Builder::Sweep | Builder::Sbvh => Err(Error::InvalidArgument(format!(
+                "{} is a CPU reference builder, not a GPU builder",
+                builder.name()
+            ))),
         }
     }
 

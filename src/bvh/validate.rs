@@ -10,6 +10,11 @@
 //! - boxes hold no NaN, every internal node's box contains both children's boxes and every leaf's
 //!   box contains its triangles' boxes, with zero tolerance (builders compute exact unions of f32
 //!   values, and min/max never round).
+//!
+//! [`validate_with_references`] is the relaxed mode for trees whose builder splits triangles into
+//! several references (SBVH spatial splits, pre-splitting): a triangle may be referenced by several
+//! leaves (at least once, never twice by the same leaf), and a leaf's box need only overlap its
+//! triangles' boxes (it bounds the clipped parts); every other check is the same.
 
 use super::Bvh;
 use crate::geometry::Aabb;
@@ -80,6 +85,19 @@ pub enum ValidationError {
     ChildNotContained { node: usize, child: usize },
     #[error("the box of leaf {node} does not contain triangle {triangle}")]
     TriangleNotContained { node: usize, triangle: usize },
+    #[error("leaf {node} references triangle {triangle} more than once")]
+    TriangleTwiceInLeaf { node: usize, triangle: usize },
+    #[error("the box of leaf {node} does not overlap triangle {triangle}")]
+    TriangleNotOverlapped { node: usize, triangle: usize },
+}
+
+/// How often a triangle may be referenced, and how a leaf box must relate to its triangles.
+#[derive(Clone, Copy, PartialEq)]
+enum References {
+    /// Exactly once in the whole tree; leaf boxes contain their triangles.
+    Single,
+    /// At least once, at most once per leaf; leaf boxes overlap their triangles.
+    Multiple,
 }
 
 fn has_nan(b: &Aabb) -> bool {
@@ -89,13 +107,32 @@ fn has_nan(b: &Aabb) -> bool {
 /// Checks `bvh` against the `triangles` it was built over; see the module documentation for the
 /// list of checks. Returns statistics of the tree, or the first defect found.
 pub fn validate(bvh: &Bvh, triangles: &[Triangle]) -> Result<ValidationStats, ValidationError> {
+    validate_mode(bvh, triangles, References::Single)
+}
+
+/// [`validate`] relaxed for trees with split triangles: every triangle is referenced at least once
+/// (not exactly once) and no leaf references a triangle twice; each leaf's box overlaps (need not
+/// contain) its triangles' boxes, while internal boxes still contain their children exactly.
+pub fn validate_with_references(
+    bvh: &Bvh,
+    triangles: &[Triangle],
+) -> Result<ValidationStats, ValidationError> {
+    validate_mode(bvh, triangles, References::Multiple)
+}
+
+fn validate_mode(
+    bvh: &Bvh,
+    triangles: &[Triangle],
+    mode: References,
+) -> Result<ValidationStats, ValidationError> {
     let nodes = &bvh.nodes;
     if nodes.is_empty() {
         return Err(ValidationError::Empty);
     }
     let mut node_seen = vec![false; nodes.len()];
     let mut entry_used = vec![false; bvh.prim_indices.len()];
-    let mut triangle_seen = vec![false; triangles.len()];
+    // The last leaf that referenced each triangle.
+    let mut triangle_leaf = vec![usize::MAX; triangles.len()];
     let mut stats = ValidationStats {
         nodes: nodes.len(),
         leaves: 0,
@@ -142,17 +179,39 @@ pub fn validate(bvh: &Bvh, triangles: &[Triangle]) -> Result<ValidationStats, Va
                         triangle_count: triangles.len(),
                     });
                 }
-                if std::mem::replace(&mut triangle_seen[triangle], true) {
-                    return Err(ValidationError::TriangleReferencedTwice {
-                        node: index,
-                        triangle,
-                    });
-                }
-                if !bounds.contains(&triangles[triangle].bounds(), 0.0) {
-                    return Err(ValidationError::TriangleNotContained {
-                        node: index,
-                        triangle,
-                    });
+                let previous = std::mem::replace(&mut triangle_leaf[triangle], index);
+                let tri_bounds = triangles[triangle].bounds();
+                match mode {
+                    References::Single => {
+                        if previous != usize::MAX {
+                            return Err(ValidationError::TriangleReferencedTwice {
+                                node: index,
+                                triangle,
+                            });
+                        }
+                        if !bounds.contains(&tri_bounds, 0.0) {
+                            return Err(ValidationError::TriangleNotContained {
+                                node: index,
+                                triangle,
+                            });
+                        }
+                    }
+                    References::Multiple => {
+                        if previous == index {
+                            return Err(ValidationError::TriangleTwiceInLeaf {
+                                node: index,
+                                triangle,
+                            });
+                        }
+                        let overlaps = bounds.min.cmple(tri_bounds.max).all()
+                            && tri_bounds.min.cmple(bounds.max).all();
+                        if !overlaps {
+                            return Err(ValidationError::TriangleNotOverlapped {
+                                node: index,
+                                triangle,
+                            });
+                        }
+                    }
                 }
             }
             stats.leaves += 1;
@@ -188,7 +247,7 @@ pub fn validate(bvh: &Bvh, triangles: &[Triangle]) -> Result<ValidationStats, Va
     if let Some(entry) = entry_used.iter().position(|&used| !used) {
         return Err(ValidationError::UnusedEntry { entry });
     }
-    if let Some(triangle) = triangle_seen.iter().position(|&seen| !seen) {
+    if let Some(triangle) = triangle_leaf.iter().position(|&leaf| leaf == usize::MAX) {
         return Err(ValidationError::TriangleMissing { triangle });
     }
     Ok(stats)
@@ -425,6 +484,116 @@ mod tests {
                 triangle: 9,
                 triangle_count: 4,
             })
+        );
+    }
+
+    /// Triangle 1 (x in [1, 2]) split at x = 1.5: leaf 1 holds triangles 0 and 1 clipped to
+    /// x ≤ 1.5, leaf 2 triangles 1, 2, 3 clipped to x ≥ 1.5.
+    fn split_tree(tris: &[Triangle]) -> Bvh {
+        let all = union(tris, &[0, 1, 2, 3]);
+        let mut left = union(tris, &[0, 1]);
+        left.max.x = 1.5;
+        let mut right = union(tris, &[1, 2, 3]);
+        right.min.x = 1.5;
+        Bvh {
+            nodes: vec![
+                BvhNode::internal(all, 1, 2),
+                BvhNode::leaf(left, 0, 2),
+                BvhNode::leaf(right, 2, 3),
+            ],
+            prim_indices: vec![0, 1, 1, 2, 3],
+        }
+    }
+
+    #[test]
+    fn relaxed_mode_accepts_split_triangles() {
+        let tris = triangles();
+        // Single-reference trees pass both modes with the same statistics.
+        let single = valid_tree(&tris);
+        assert_eq!(
+            validate_with_references(&single, &tris),
+            validate(&single, &tris)
+        );
+        let split = split_tree(&tris);
+        let stats = validate_with_references(&split, &tris).unwrap();
+        assert_eq!(
+            stats,
+            ValidationStats {
+                nodes: 3,
+                leaves: 2,
+                max_depth: 1,
+                max_leaf_size: 3,
+            }
+        );
+        // The strict mode rejects the clipped leaf box and the second reference.
+        assert_eq!(
+            validate(&split, &tris),
+            Err(ValidationError::TriangleNotContained {
+                node: 2,
+                triangle: 1,
+            })
+        );
+    }
+
+    #[test]
+    fn relaxed_mode_catches_duplicates_within_a_leaf() {
+        let tris = triangles();
+        let mut bvh = split_tree(&tris);
+        // Leaf 2 references triangle 1 twice (instead of triangle 2, which leaf 1 now holds).
+        bvh.prim_indices = vec![0, 2, 1, 1, 3];
+        bvh.nodes[1] = BvhNode::leaf(union(&tris, &[0, 1, 2]), 0, 2);
+        bvh.nodes[0] = BvhNode::internal(union(&tris, &[0, 1, 2, 3]), 1, 2);
+        assert_eq!(
+            validate_with_references(&bvh, &tris),
+            Err(ValidationError::TriangleTwiceInLeaf {
+                node: 2,
+                triangle: 1,
+            })
+        );
+    }
+
+    #[test]
+    fn relaxed_mode_catches_missing_triangles_and_bad_boxes() {
+        let tris = triangles();
+        // Triangle 3 is dropped from leaf 2.
+        let mut bvh = split_tree(&tris);
+        bvh.nodes[2] = BvhNode::leaf(bvh.nodes[2].bounds(), 2, 2);
+        bvh.prim_indices.pop();
+        assert_eq!(
+            validate_with_references(&bvh, &tris),
+            Err(ValidationError::TriangleMissing { triangle: 3 })
+        );
+        // A triangle outside the tree's triangles is still caught.
+        let mut more = tris.clone();
+        more.push(tris[0]);
+        assert_eq!(
+            validate_with_references(&split_tree(&tris), &more),
+            Err(ValidationError::TriangleMissing { triangle: 4 })
+        );
+        // A leaf box that misses one of its triangles entirely.
+        let mut bvh = split_tree(&tris);
+        bvh.nodes[1].max[0] = 0.5;
+        bvh.nodes[1].min[0] = 0.0;
+        assert_eq!(
+            validate_with_references(&bvh, &tris),
+            Err(ValidationError::TriangleNotOverlapped {
+                node: 1,
+                triangle: 1,
+            })
+        );
+        // Internal boxes must still contain their children exactly.
+        let mut bvh = split_tree(&tris);
+        bvh.nodes[0].max[0] = 3.5;
+        assert_eq!(
+            validate_with_references(&bvh, &tris),
+            Err(ValidationError::ChildNotContained { node: 0, child: 2 })
+        );
+        // Shared entries stay an error (leaf 2 is checked first, then leaf 1 reuses entry 1).
+        let mut bvh = split_tree(&tris);
+        bvh.nodes[2] = BvhNode::leaf(bvh.nodes[2].bounds(), 1, 1);
+        assert_eq!(
+            validate_with_references(&bvh, &tris),
+            Err(ValidationError::EntrySharedByLeaves { node: 1, entry: 1 })
         );
     }
 

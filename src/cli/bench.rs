@@ -6,8 +6,7 @@ use std::path::{Path, PathBuf};
 
 use clap::Args;
 use serde::Serialize;
-use treelet::bvh::treelet::TreeletSettings;
-use treelet::bvh::{sah_cost, validate, write_bvh, Builder};
+use treelet::bvh::{sah_cost, validate, validate_with_references, write_bvh, Builder};
 use treelet::gpu::{aggregate_stages, GpuContext};
 use treelet::scene::load_scene;
 use treelet::trace::PathTracer;
@@ -43,6 +42,7 @@ struct BenchRecord {
     builder: &'static str,
     treelet_size: Option<u32>,
     rounds: Option<u32>,
+    split_budget: Option<f64>,
     adapter: String,
     triangles: usize,
     nodes: usize,
@@ -70,7 +70,11 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
     for &builder in &builders {
         let (gpu_scene, report) = builder.build(gpu, &scene, &params, args.repeats)?;
         let bvh = gpu_scene.download_bvh(gpu)?;
-        let validation = validate(&bvh, &scene.triangles);
+        let validation = if builder.duplicates_references() {
+            validate_with_references(&bvh, &scene.triangles)
+        } else {
+            validate(&bvh, &scene.triangles)
+        };
         if let Err(e) = &validation {
             log::error!("{} tree of {} is invalid: {e}", builder.label(), scene.name);
         }
@@ -92,8 +96,11 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
         let record = BenchRecord {
             scene: scene.name.clone(),
             builder: builder.name(),
-            treelet_size: treelet_settings(builder).map(|s| s.treelet_size),
-            rounds: treelet_settings(builder).map(|s| s.rounds),
+            treelet_size: builder.treelet_settings().map(|s| s.treelet_size),
+            rounds: builder.treelet_settings().map(|s| s.rounds),
+            split_budget: builder
+                .treelet_settings()
+                .map(|s| f64::from(s.split_percent) / 100.0),
             adapter: gpu.adapter_description(),
             triangles: scene.triangles.len(),
             nodes: bvh.nodes.len(),
@@ -122,13 +129,6 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
         );
     }
     Ok(())
-}
-
-fn treelet_settings(builder: Builder) -> Option<TreeletSettings> {
-    match builder {
-        Builder::Trbvh(settings) => Some(settings),
-        _ => None,
-    }
 }
 
 /// `out.bvh` + "trbvh n=7 r=3" -> `out-trbvh-n7-r3.bvh`.

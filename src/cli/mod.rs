@@ -2,11 +2,13 @@
 
 mod bench;
 mod render;
+mod render_frames;
+mod tradeoff;
 mod view;
 
 use clap::{Args, Parser, Subcommand};
 use treelet::bvh::treelet::TreeletSettings;
-use treelet::bvh::{Builder, SahParams};
+use treelet::bvh::{Builder, SahParams, DEFAULT_SPLIT_PERCENT};
 use treelet::gpu::{GpuContext, GpuOptions};
 use treelet::trace::RenderSettings;
 use treelet::Result;
@@ -38,6 +40,8 @@ enum Command {
     Scenes,
     /// Open the interactive viewer (the default when a display is available)
     View(view::ViewArgs),
+    /// Measure every builder configuration and chart build time against ray throughput
+    Tradeoff(tradeoff::TradeoffArgs),
 }
 
 /// Options shared by `render` and `bench`.
@@ -70,6 +74,10 @@ pub struct TraceArgs {
     /// Restructuring rounds for trbvh, overriding the preset; `bench` takes a comma-separated list
     #[arg(long, value_delimiter = ',')]
     rounds: Vec<u32>,
+    /// Pre-splitting budget β of trbvh-split (extra references per triangle, 0..=1; default 0.3);
+    /// `bench` takes a comma-separated list
+    #[arg(long, value_delimiter = ',', value_parser = parse_split_budget)]
+    split_budget: Vec<u32>,
 }
 
 impl TraceArgs {
@@ -91,13 +99,20 @@ impl TraceArgs {
                 rounds.iter().map(move |&rounds| TreeletSettings {
                     treelet_size,
                     rounds,
+                    split_percent: 0,
                 })
             })
             .collect()
     }
 
-    /// The builders to run: `builders`, with trbvh expanded into every treelet variant.
+    /// The builders to run: `builders`, with trbvh expanded into every treelet variant and
+    /// trbvh-split also into every split budget.
     fn builder_variants(&self, builders: &[Builder]) -> Vec<Builder> {
+        let budgets = if self.split_budget.is_empty() {
+            vec![DEFAULT_SPLIT_PERCENT]
+        } else {
+            self.split_budget.clone()
+        };
         builders
             .iter()
             .flat_map(|&b| match b {
@@ -105,6 +120,21 @@ impl TraceArgs {
                     .treelet_variants()
                     .into_iter()
                     .map(|s| b.with_treelet_settings(s))
+                    .collect::<Vec<_>>(),
+                Builder::TrbvhSplit(_) => self
+                    .treelet_variants()
+                    .into_iter()
+                    .flat_map(|s| {
+                        budgets.iter().map(move |&split_percent| {
+                            // β = 0 is trbvh itself (no pre-splitting).
+                            let settings = TreeletSettings { split_percent, ..s };
+                            if split_percent == 0 {
+                                Builder::Trbvh(settings)
+                            } else {
+                                b.with_treelet_settings(settings)
+                            }
+                        })
+                    })
                     .collect(),
                 other => vec![other],
             })
@@ -133,12 +163,28 @@ impl TraceArgs {
     }
 }
 
+/// β as a fraction (e.g. 0.3) to whole percent.
+fn parse_split_budget(text: &str) -> std::result::Result<u32, String> {
+    let beta: f64 = text
+        .parse()
+        .map_err(|_| format!("'{text}' is not a number"))?;
+    if !(0.0..=1.0).contains(&beta) {
+        return Err(format!("split budget must be between 0 and 1, got {text}"));
+    }
+    Ok((beta * 100.0).round() as u32)
+}
+
 fn parse_preset(name: &str) -> std::result::Result<TreeletSettings, String> {
     TreeletSettings::preset(name).map_err(|e| e.to_string())
 }
 
 fn parse_builder(name: &str) -> std::result::Result<Builder, String> {
     Builder::parse(name).map_err(|e| e.to_string())
+}
+
+/// A builder name, or `refit` / `refit-trbvh` (animated scenes).
+fn parse_update_mode(name: &str) -> std::result::Result<treelet::anim::UpdateMode, String> {
+    treelet::anim::UpdateMode::parse(name).map_err(|e| e.to_string())
 }
 
 pub fn run(cli: Cli) -> Result<()> {
@@ -154,9 +200,13 @@ pub fn run(cli: Cli) -> Result<()> {
             for entry in treelet::scene::SCENES {
                 println!("{:<16} {}", entry.name, entry.description);
             }
+            for entry in treelet::anim::ANIMATIONS {
+                println!("{:<16} [animated] {}", entry.name, entry.description);
+            }
             Ok(())
         }
         Command::View(args) => view::run(cli.adapter.clone(), args),
+        Command::Tradeoff(args) => tradeoff::run(&gpu()?, &args),
     }
 }
 

@@ -1,33 +1,59 @@
-//! `treelet render`: build a scene's BVH, path-trace it and write a PNG.
+//! `treelet render`: build a scene's BVH, path-trace it and write a PNG; with `--frames N`, render
+//! N frames of an animated scene into a folder (`render_frames`).
 
 use std::path::PathBuf;
 
 use clap::Args;
+use treelet::anim::{is_animation, load_animation, UpdateMode};
 use treelet::bvh::Builder;
 use treelet::gpu::GpuContext;
-use treelet::scene::load_scene;
+use treelet::scene::{load_scene, Scene};
 use treelet::trace::PathTracer;
 use treelet::{Error, Result};
 
-use super::{parse_builder, TraceArgs};
+use super::{parse_update_mode, render_frames, TraceArgs};
 
 #[derive(Args, Debug)]
 pub struct RenderArgs {
     #[command(flatten)]
-    trace: TraceArgs,
-    /// Output PNG file
-    #[arg(long, default_value = "treelet.png")]
-    out: PathBuf,
-    /// BVH builder
-    #[arg(long, default_value = "sweep", value_parser = parse_builder)]
-    builder: Builder,
+    pub trace: TraceArgs,
+    /// Output PNG file (default treelet.png); with --frames, the folder for frame_0000.png, …
+    /// (default frames)
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// BVH builder: sweep, sbvh, lbvh, trbvh (default sweep); with --frames also refit and
+    /// refit-trbvh (the first frame's tree, refitted every frame; default lbvh)
+    #[arg(long, value_parser = parse_update_mode)]
+    pub builder: Option<UpdateMode>,
+    /// Render this many frames of an animated scene (see `treelet scenes`), one PNG each, with the
+    /// per-frame pipeline: animate → build on the GPU → trace
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub frames: Option<u32>,
+    /// With --frames: print one JSON object per frame (frame, t, build_ms, sah, rays, trace_ms,
+    /// mrays_per_s, …)
+    #[arg(long, requires = "frames")]
+    pub json: bool,
 }
 
 pub fn run(gpu: &GpuContext, args: &RenderArgs) -> Result<()> {
-    let scene = load_scene(&args.trace.scene)?;
+    if let Some(frames) = args.frames {
+        return render_frames::run(gpu, args, frames);
+    }
+    let builder = match args.builder {
+        None => Builder::Sweep,
+        Some(UpdateMode::Rebuild(builder)) => builder,
+        Some(mode @ UpdateMode::Refit(_)) => {
+            return Err(Error::InvalidArgument(format!(
+                "--builder {} refits an animated scene's tree from frame to frame: use it with --frames",
+                mode.name()
+            )))
+        }
+    };
+    let out = args.out.clone().unwrap_or_else(|| "treelet.png".into());
+    let scene = load_static(&args.trace.scene)?;
     let params = args.trace.sah_params()?;
     log::info!("{}: {} triangles", scene.name, scene.triangles.len());
-    let builders = args.trace.builder_variants(&[args.builder]);
+    let builders = args.trace.builder_variants(&[builder]);
     let [builder] = builders[..] else {
         return Err(Error::InvalidArgument(
             "render takes one --treelet-size and one --rounds value".into(),
@@ -43,8 +69,8 @@ pub fn run(gpu: &GpuContext, args: &RenderArgs) -> Result<()> {
     let mut tracer = PathTracer::new(gpu, args.trace.render_settings())?;
     let stats = tracer.trace(gpu, &gpu_scene, &scene.camera, scene.sky, args.trace.spp)?;
     let image = tracer.read_image(gpu)?;
-    image.save(&args.out).map_err(|e| Error::Io {
-        path: args.out.clone(),
+    image.save(&out).map_err(|e| Error::Io {
+        path: out.clone(),
         source: std::io::Error::other(e),
     })?;
     let mrays = stats
@@ -52,7 +78,7 @@ pub fn run(gpu: &GpuContext, args: &RenderArgs) -> Result<()> {
         .map_or("n/a".to_string(), |m| format!("{m:.2}"));
     log::info!(
         "wrote {} ({}x{}, {} spp, {} rays, {mrays} Mrays/s on {})",
-        args.out.display(),
+        out.display(),
         args.trace.width,
         args.trace.height,
         stats.samples,
@@ -60,4 +86,13 @@ pub fn run(gpu: &GpuContext, args: &RenderArgs) -> Result<()> {
         gpu.adapter_description()
     );
     Ok(())
+}
+
+/// A static scene by name or path; an animated scene's first frame.
+fn load_static(name: &str) -> Result<Scene> {
+    if is_animation(name) {
+        let animation = load_animation(name)?;
+        return Ok(animation.scene_at(animation.time_range().start));
+    }
+    load_scene(name)
 }

@@ -4,21 +4,23 @@
 use std::path::PathBuf;
 
 use clap::Args;
+use treelet::anim::{UpdateMode, DEFAULT_ANIMATION};
 use treelet::app::ViewerOptions;
-use treelet::bvh::Builder;
 use treelet::gpu::GpuOptions;
 use treelet::Result;
 
-use super::{parse_builder, DEFAULT_SCENE};
+use super::parse_update_mode;
 
 #[derive(Args, Debug)]
 pub struct ViewArgs {
-    /// Scene name (see `treelet scenes`) or path to an OBJ file
-    #[arg(long, default_value = DEFAULT_SCENE)]
+    /// Scene name (see `treelet scenes`; animated ones play), path to an OBJ file, or a folder of
+    /// frame OBJs (an OBJ sequence)
+    #[arg(long, default_value = DEFAULT_ANIMATION)]
     scene: String,
-    /// BVH builder (GPU builders are rebuilt every frame)
-    #[arg(long, default_value = "lbvh", value_parser = parse_builder)]
-    builder: Builder,
+    /// BVH builder (GPU builders are rebuilt every frame); for animated scenes also `refit` or
+    /// `refit-trbvh` (the first frame's tree, refitted every frame)
+    #[arg(long, default_value = "lbvh", value_parser = parse_update_mode)]
+    builder: UpdateMode,
     /// Window width in pixels
     #[arg(long, default_value_t = 1280, value_parser = clap::value_parser!(u32).range(1..))]
     width: u32,

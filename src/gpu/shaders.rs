@@ -22,10 +22,34 @@ const INCLUDES: &[(&str, &str)] = &[
         include_str!("../../shaders/include/random.wgsl"),
     ),
     ("aabb.wgsl", include_str!("../../shaders/include/aabb.wgsl")),
+    (
+        "split_grid.wgsl",
+        include_str!("../../shaders/include/split_grid.wgsl"),
+    ),
+    (
+        "leaf_gather.wgsl",
+        include_str!("../../shaders/include/leaf_gather.wgsl"),
+    ),
 ];
 
 /// Every compute kernel: (file name, source before include expansion).
 pub const KERNELS: &[(&str, &str)] = &[
+    (
+        "triangles_priority.wgsl",
+        include_str!("../../shaders/triangles_priority.wgsl"),
+    ),
+    (
+        "splits_budget.wgsl",
+        include_str!("../../shaders/splits_budget.wgsl"),
+    ),
+    (
+        "triangles_split.wgsl",
+        include_str!("../../shaders/triangles_split.wgsl"),
+    ),
+    (
+        "triangles_bounds.wgsl",
+        include_str!("../../shaders/triangles_bounds.wgsl"),
+    ),
     (
         "treelet_optimize.wgsl",
         include_str!("../../shaders/treelet_optimize.wgsl"),
@@ -85,6 +109,22 @@ pub const KERNELS: &[(&str, &str)] = &[
     (
         "image_display.wgsl",
         include_str!("../../shaders/image_display.wgsl"),
+    ),
+    (
+        "cloth_animate.wgsl",
+        include_str!("../../shaders/cloth_animate.wgsl"),
+    ),
+    (
+        "bodies_animate.wgsl",
+        include_str!("../../shaders/bodies_animate.wgsl"),
+    ),
+    (
+        "debris_animate.wgsl",
+        include_str!("../../shaders/debris_animate.wgsl"),
+    ),
+    (
+        "nodes_refit.wgsl",
+        include_str!("../../shaders/nodes_refit.wgsl"),
     ),
 ];
 

@@ -7,7 +7,6 @@ use crate::geometry::Aabb;
 use crate::gpu::{
     bind_entry, compute_pipeline, dispatch_grid, storage_buffer_zeroed, uniform_buffer, GpuContext,
 };
-use crate::scene::Triangle;
 use crate::Result;
 
 /// Elements one workgroup reduces (WORKGROUP × PER_INVOCATION in the kernel).
@@ -21,22 +20,22 @@ struct ReduceParams {
 }
 const _: () = assert!(std::mem::size_of::<ReduceParams>() == 16);
 
-/// CPU twin: bounds of the triangles' AABB centroids.
-pub fn centroid_bounds_cpu(triangles: &[Triangle]) -> Aabb {
-    triangles
+/// CPU twin: bounds of the primitive boxes' centroids.
+pub fn centroid_bounds_cpu(prim_boxes: &[Aabb]) -> Aabb {
+    prim_boxes
         .iter()
-        .fold(Aabb::EMPTY, |b, t| b.grow(t.bounds().centroid()))
+        .fold(Aabb::EMPTY, |b, p| b.grow(p.centroid()))
 }
 
-pub(crate) struct CentroidBounds {
-    from_triangles: wgpu::ComputePipeline,
+pub struct CentroidBounds {
+    from_prims: wgpu::ComputePipeline,
     from_boxes: wgpu::ComputePipeline,
 }
 
 impl CentroidBounds {
     pub fn new(ctx: &GpuContext) -> Self {
         Self {
-            from_triangles: compute_pipeline(ctx, "centroids_reduce.wgsl", "from_triangles"),
+            from_prims: compute_pipeline(ctx, "centroids_reduce.wgsl", "from_prims"),
             from_boxes: compute_pipeline(ctx, "centroids_reduce.wgsl", "from_boxes"),
         }
     }
@@ -55,7 +54,7 @@ impl CentroidBounds {
         Self::level_sizes(count).len()
     }
 
-    /// Scratch buffers for reducing up to `count` triangles: one per level.
+    /// Scratch buffers for reducing up to `count` primitives: one per level.
     pub fn level_buffers(ctx: &GpuContext, count: u32) -> Result<Vec<wgpu::Buffer>> {
         Self::level_sizes(count)
             .into_iter()
@@ -63,14 +62,16 @@ impl CentroidBounds {
             .collect()
     }
 
-    /// Records the reduction; the bounds end up in box 0 of `levels.last()`.
+    /// Records the reduction of the boxes' centroids (or of the boxes themselves, when
+    /// `of_centroids` is false); the bounds end up in box 0 of `levels.last()`.
     pub fn record(
         &self,
         ctx: &GpuContext,
         pass: &mut wgpu::ComputePass<'_>,
-        triangles: &wgpu::Buffer,
+        prim_boxes: &wgpu::Buffer,
         count: u32,
         levels: &[wgpu::Buffer],
+        of_centroids: bool,
     ) {
         let mut remaining = count;
         for (level, output) in levels.iter().enumerate() {
@@ -83,18 +84,22 @@ impl CentroidBounds {
                 },
             );
             let (pipeline, input) = if level == 0 {
-                (&self.from_triangles, triangles)
+                let first = if of_centroids {
+                    &self.from_prims
+                } else {
+                    &self.from_boxes
+                };
+                (first, prim_boxes)
             } else {
                 (&self.from_boxes, &levels[level - 1])
             };
-            let input_binding = if level == 0 { 1 } else { 2 };
             let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("centroids_reduce"),
                 layout: &pipeline.get_bind_group_layout(0),
                 entries: &[
                     bind_entry(0, &params),
-                    bind_entry(input_binding, input),
-                    bind_entry(3, output),
+                    bind_entry(1, input),
+                    bind_entry(2, output),
                 ],
             });
             let (gx, gy) = dispatch_grid(ctx, remaining.div_ceil(TILE).max(1), 1);

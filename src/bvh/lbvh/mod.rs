@@ -9,16 +9,19 @@
 mod centroid_bounds;
 mod hierarchy;
 mod morton;
+mod prim_bounds;
 mod refit;
 
 pub use centroid_bounds::centroid_bounds_cpu;
 pub use hierarchy::{hierarchy_cpu, Hierarchy};
 pub use morton::{morton_key, morton_keys_cpu, MORTON_BITS};
+pub use prim_bounds::{prim_boxes_cpu, GpuAabb};
 pub use refit::assemble_lbvh_cpu;
 
-use centroid_bounds::CentroidBounds;
+pub use centroid_bounds::CentroidBounds;
 use hierarchy::HierarchyEmission;
 use morton::MortonKeys;
+pub use prim_bounds::TriangleBounds;
 use refit::BoundsRefit;
 
 use super::{Bvh, BvhNode};
@@ -29,16 +32,29 @@ use crate::sort::{sort_pairs_cpu, RadixSort};
 use crate::trace::GpuScene;
 use crate::{Error, Result};
 
-/// CPU twin of the whole GPU LBVH pipeline.
+/// CPU twin of the whole GPU LBVH pipeline over triangles.
 pub fn build_lbvh_cpu(triangles: &[Triangle]) -> Bvh {
-    if triangles.is_empty() {
-        return Bvh::default();
+    build_lbvh_from_boxes_cpu(&prim_boxes_cpu(triangles)).0
+}
+
+/// CPU twin of the LBVH stages over primitive boxes: the tree and its parent links.
+pub fn build_lbvh_from_boxes_cpu(prim_boxes: &[Aabb]) -> (Bvh, Vec<u32>) {
+    if prim_boxes.is_empty() {
+        return (Bvh::default(), Vec::new());
     }
-    let bounds = centroid_bounds_cpu(triangles);
-    let keys = morton_keys_cpu(triangles, &bounds);
-    let values: Vec<u32> = (0..triangles.len() as u32).collect();
+    let bounds = centroid_bounds_cpu(prim_boxes);
+    let keys = morton_keys_cpu(prim_boxes, &bounds);
+    let values: Vec<u32> = (0..prim_boxes.len() as u32).collect();
     let (sorted_keys, sorted_prims) = sort_pairs_cpu(&keys, &values, MORTON_BITS);
-    assemble_lbvh_cpu(triangles, &hierarchy_cpu(&sorted_keys), &sorted_prims)
+    let hierarchy = hierarchy_cpu(&sorted_keys);
+    let bvh = assemble_lbvh_cpu(prim_boxes, &hierarchy, &sorted_prims);
+    (bvh, hierarchy.parents)
+}
+
+/// The primitives a build runs over: `count` boxes (`GpuAabb`) in `boxes`.
+pub(crate) struct Prims<'a> {
+    pub boxes: &'a wgpu::Buffer,
+    pub count: u32,
 }
 
 /// Intermediate results of one GPU build, read back for stage-by-stage comparison in tests.
@@ -55,6 +71,7 @@ pub struct LbvhStages {
 /// Scratch buffers sized for up to `capacity` triangles.
 struct Scratch {
     capacity: u32,
+    prim_boxes: wgpu::Buffer,
     bounds_levels: Vec<wgpu::Buffer>,
     keys: wgpu::Buffer,
     parents: wgpu::Buffer,
@@ -63,6 +80,7 @@ struct Scratch {
 
 /// The GPU LBVH builder: pipelines and scratch space, reused across frames.
 pub struct LbvhBuilder {
+    triangle_bounds: TriangleBounds,
     bounds: CentroidBounds,
     morton: MortonKeys,
     sort: RadixSort,
@@ -77,6 +95,7 @@ const TIMER_CAPACITY: u32 = 5;
 impl LbvhBuilder {
     pub fn new(ctx: &GpuContext) -> Self {
         Self {
+            triangle_bounds: TriangleBounds::new(ctx),
             bounds: CentroidBounds::new(ctx),
             morton: MortonKeys::new(ctx),
             sort: RadixSort::new(ctx),
@@ -97,8 +116,8 @@ impl LbvhBuilder {
         timer.read(ctx)
     }
 
-    /// Records a whole build into `encoder` (5 timestamped passes); returns the triangle count.
-    /// Later stages (treelet optimization) append to the same encoder.
+    /// Records a whole build over the scene's triangles into `encoder` (5 timestamped passes);
+    /// returns the primitive count. Later stages (treelet optimization) append to the encoder.
     pub fn record(
         &mut self,
         ctx: &GpuContext,
@@ -106,10 +125,54 @@ impl LbvhBuilder {
         scene: &mut GpuScene,
         timer: &mut GpuTimer,
     ) -> Result<u32> {
-        let n = self.prepare(ctx, scene)?;
-        self.record_keys(ctx, encoder, scene, n, timer);
+        let n = scene.triangle_count;
+        self.prepare(ctx, scene, n)?;
+        self.record_keys(ctx, encoder, scene, n, true, timer);
         self.record_tree(ctx, encoder, scene, n, timer)?;
         Ok(n)
+    }
+
+    /// Records a build over `count` primitive boxes already written to `prim_boxes()` (by the
+    /// pre-splitting stage, after `reserve(count)`); returns `count`.
+    pub fn record_prims(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &mut GpuScene,
+        count: u32,
+        timer: &mut GpuTimer,
+    ) -> Result<u32> {
+        self.prepare(ctx, scene, count)?;
+        self.record_keys(ctx, encoder, scene, count, false, timer);
+        self.record_tree(ctx, encoder, scene, count, timer)?;
+        Ok(count)
+    }
+
+    /// Grows the scratch space to hold `capacity` primitives.
+    pub fn reserve(&mut self, ctx: &GpuContext, capacity: u32) -> Result<()> {
+        if capacity == 0 {
+            return Err(Error::InvalidArgument(
+                "cannot build a BVH over zero primitives".into(),
+            ));
+        }
+        if self.scratch.as_ref().is_none_or(|s| s.capacity < capacity) {
+            let n = u64::from(capacity);
+            self.scratch = None;
+            self.scratch = Some(Scratch {
+                capacity,
+                prim_boxes: storage_buffer_zeroed(ctx, "prim boxes", n * 32)?,
+                bounds_levels: CentroidBounds::level_buffers(ctx, capacity)?,
+                keys: storage_buffer_zeroed(ctx, "morton keys", n * 8)?,
+                parents: storage_buffer_zeroed(ctx, "parents", (2 * n - 1) * 4)?,
+                arrivals: storage_buffer_zeroed(ctx, "arrival counters", n * 4)?,
+            });
+        }
+        Ok(())
+    }
+
+    /// The primitive boxes the build reads (`GpuAabb` each); valid after `reserve`.
+    pub fn prim_boxes(&self) -> Option<&wgpu::Buffer> {
+        self.scratch.as_ref().map(|s| &s.prim_boxes)
     }
 
     /// Parent links of the last build's nodes (root: unspecified), for passes that climb the tree.
@@ -119,10 +182,11 @@ impl LbvhBuilder {
 
     /// Like `build`, but in two submissions with every intermediate buffer read back.
     pub fn build_stages(&mut self, ctx: &GpuContext, scene: &mut GpuScene) -> Result<LbvhStages> {
-        let n = self.prepare(ctx, scene)?;
+        let n = scene.triangle_count;
+        self.prepare(ctx, scene, n)?;
         let mut timer = GpuTimer::new(ctx, TIMER_CAPACITY);
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        self.record_keys(ctx, &mut encoder, scene, n, &mut timer);
+        self.record_keys(ctx, &mut encoder, scene, n, true, &mut timer);
         ctx.queue.submit([encoder.finish()]);
         let scratch = self.scratch.as_ref().expect("prepared");
         let bounds_node: Vec<BvhNode> =
@@ -142,14 +206,9 @@ impl LbvhBuilder {
         })
     }
 
-    /// Sizes scratch and output buffers for the scene; returns the triangle count.
-    fn prepare(&mut self, ctx: &GpuContext, scene: &mut GpuScene) -> Result<u32> {
-        let n = scene.triangle_count;
-        if n == 0 {
-            return Err(Error::InvalidArgument(
-                "cannot build a BVH over zero triangles".into(),
-            ));
-        }
+    /// Sizes scratch and output buffers for `n` primitives.
+    fn prepare(&mut self, ctx: &GpuContext, scene: &mut GpuScene, n: u32) -> Result<()> {
+        self.reserve(ctx, n)?;
         let node_bytes = u64::from(2 * n - 1) * std::mem::size_of::<BvhNode>() as u64;
         if scene.nodes.size() < node_bytes {
             scene.nodes = storage_buffer_zeroed(ctx, "bvh nodes", node_bytes)?;
@@ -157,30 +216,27 @@ impl LbvhBuilder {
         if scene.prim_indices.size() < u64::from(n) * 4 {
             scene.prim_indices = storage_buffer_zeroed(ctx, "prim indices", u64::from(n) * 4)?;
         }
-        if self.scratch.as_ref().is_none_or(|s| s.capacity < n) {
-            self.scratch = Some(Scratch {
-                capacity: n,
-                bounds_levels: CentroidBounds::level_buffers(ctx, n)?,
-                keys: storage_buffer_zeroed(ctx, "morton keys", u64::from(n) * 8)?,
-                parents: storage_buffer_zeroed(ctx, "parents", u64::from(2 * n - 1) * 4)?,
-                arrivals: storage_buffer_zeroed(ctx, "arrival counters", u64::from(n) * 4)?,
-            });
-        }
         scene.node_count = 2 * n - 1;
         scene.prim_count = n;
-        Ok(n)
+        Ok(())
     }
 
-    /// Stages 1-2: centroid bounds and Morton keys (values = identity permutation).
+    /// Stages 0-2: primitive boxes of the triangles (when `from_triangles`), centroid bounds and
+    /// Morton keys (values = identity permutation).
     fn record_keys(
         &self,
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         scene: &GpuScene,
         n: u32,
+        from_triangles: bool,
         timer: &mut GpuTimer,
     ) {
         let scratch = self.scratch.as_ref().expect("prepared");
+        let prims = Prims {
+            boxes: &scratch.prim_boxes,
+            count: n,
+        };
         // The level buffers are sized for the capacity; reduce over exactly the levels n needs.
         let levels = CentroidBounds::level_count(n);
         let bounds_levels = &scratch.bounds_levels[..levels];
@@ -189,8 +245,17 @@ impl LbvhBuilder {
                 label: Some("centroid bounds"),
                 timestamp_writes: timer.pass("bounds"),
             });
+            if from_triangles {
+                self.triangle_bounds.record(
+                    ctx,
+                    &mut pass,
+                    &scene.triangles,
+                    n,
+                    &scratch.prim_boxes,
+                );
+            }
             self.bounds
-                .record(ctx, &mut pass, &scene.triangles, n, bounds_levels);
+                .record(ctx, &mut pass, &scratch.prim_boxes, n, bounds_levels, true);
         }
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("morton keys"),
@@ -199,6 +264,7 @@ impl LbvhBuilder {
         self.morton.record(
             ctx,
             &mut pass,
+            &prims,
             scene,
             &bounds_levels[levels - 1],
             &scratch.keys,
@@ -243,8 +309,18 @@ impl LbvhBuilder {
             label: Some("bounds refit"),
             timestamp_writes: timer.pass("refit"),
         });
-        self.refit
-            .record(ctx, &mut pass, scene, &scratch.parents, &scratch.arrivals);
+        let prims = Prims {
+            boxes: &scratch.prim_boxes,
+            count: n,
+        };
+        self.refit.record(
+            ctx,
+            &mut pass,
+            &prims,
+            scene,
+            &scratch.parents,
+            &scratch.arrivals,
+        );
         Ok(())
     }
 }

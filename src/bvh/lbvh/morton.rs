@@ -4,9 +4,9 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
+use super::Prims;
 use crate::geometry::Aabb;
 use crate::gpu::{bind_entry, compute_pipeline, dispatch_grid, uniform_buffer, GpuContext};
-use crate::scene::Triangle;
 use crate::trace::GpuScene;
 
 /// Key bits: 21 per axis.
@@ -28,11 +28,10 @@ fn spread_bits(x: u32) -> u64 {
     (0..21).fold(0u64, |acc, k| acc | (u64::from((x >> k) & 1) << (3 * k)))
 }
 
-/// CPU twin: the Morton key of one triangle's AABB centroid within `bounds`. The grid is cubic:
+/// CPU twin: the Morton key of one primitive box's centroid within `bounds`. The grid is cubic:
 /// its cell size follows the bounds' longest side on every axis, so flat scenes do not spend key
 /// bits (and top-level splits) on their thin axis.
-pub fn morton_key(triangle: &Triangle, bounds: &Aabb) -> u64 {
-    let b = triangle.bounds();
+pub fn morton_key(b: &Aabb, bounds: &Aabb) -> u64 {
     let c = (b.min + b.max) * 0.5;
     let extent = (bounds.max - bounds.min).max_element();
     let scale = if extent > 0.0 { GRID / extent } else { 0.0 };
@@ -41,8 +40,8 @@ pub fn morton_key(triangle: &Triangle, bounds: &Aabb) -> u64 {
 }
 
 /// CPU twin of the whole stage.
-pub fn morton_keys_cpu(triangles: &[Triangle], bounds: &Aabb) -> Vec<u64> {
-    triangles.iter().map(|t| morton_key(t, bounds)).collect()
+pub fn morton_keys_cpu(prim_boxes: &[Aabb], bounds: &Aabb) -> Vec<u64> {
+    prim_boxes.iter().map(|b| morton_key(b, bounds)).collect()
 }
 
 pub(crate) struct MortonKeys {
@@ -56,17 +55,18 @@ impl MortonKeys {
         }
     }
 
-    /// Records key computation over the scene's triangles: `keys[i]` (as `[lo, hi]`) and
+    /// Records key computation over the primitives: `keys[i]` (as `[lo, hi]`) and
     /// `scene.prim_indices[i] = i` (the values the sort permutes).
     pub fn record(
         &self,
         ctx: &GpuContext,
         pass: &mut wgpu::ComputePass<'_>,
+        prims: &Prims<'_>,
         scene: &GpuScene,
         centroid_bounds: &wgpu::Buffer,
         keys: &wgpu::Buffer,
     ) {
-        let count = scene.triangle_count;
+        let count = prims.count;
         let (gx, gy) = dispatch_grid(ctx, count, WORKGROUP);
         let params = uniform_buffer(
             ctx,
@@ -82,7 +82,7 @@ impl MortonKeys {
             layout: &self.pipeline.get_bind_group_layout(0),
             entries: &[
                 bind_entry(0, &params),
-                bind_entry(1, &scene.triangles),
+                bind_entry(1, prims.boxes),
                 bind_entry(2, centroid_bounds),
                 bind_entry(3, keys),
                 bind_entry(4, &scene.prim_indices),

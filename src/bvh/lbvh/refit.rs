@@ -6,10 +6,10 @@
 use bytemuck::{Pod, Zeroable};
 
 use super::Hierarchy;
+use super::Prims;
 use crate::bvh::{Bvh, BvhNode};
 use crate::geometry::Aabb;
 use crate::gpu::{bind_entry, compute_pipeline, dispatch_grid, uniform_buffer, GpuContext};
-use crate::scene::Triangle;
 use crate::trace::GpuScene;
 
 const WORKGROUP: u32 = 64;
@@ -24,16 +24,12 @@ struct RefitParams {
 const _: () = assert!(std::mem::size_of::<RefitParams>() == 16);
 
 /// CPU twin: the LBVH in the node layout from the hierarchy and the sorted primitive order.
-pub fn assemble_lbvh_cpu(
-    triangles: &[Triangle],
-    hierarchy: &Hierarchy,
-    sorted_prims: &[u32],
-) -> Bvh {
+pub fn assemble_lbvh_cpu(prim_boxes: &[Aabb], hierarchy: &Hierarchy, sorted_prims: &[u32]) -> Bvh {
     let n = sorted_prims.len();
     let leaf_base = n - 1;
     let mut nodes = vec![BvhNode::leaf(Aabb::EMPTY, 0, 0); 2 * n - 1];
     for (j, &prim) in sorted_prims.iter().enumerate() {
-        nodes[leaf_base + j] = BvhNode::leaf(triangles[prim as usize].bounds(), j as u32, 1);
+        nodes[leaf_base + j] = BvhNode::leaf(prim_boxes[prim as usize], j as u32, 1);
     }
     // Internal boxes in post-order (children before parents), with an explicit stack.
     let mut stack = vec![(0u32, false)];
@@ -74,11 +70,12 @@ impl BoundsRefit {
         &self,
         ctx: &GpuContext,
         pass: &mut wgpu::ComputePass<'_>,
+        prims: &Prims<'_>,
         scene: &GpuScene,
         parents: &wgpu::Buffer,
         arrivals: &wgpu::Buffer,
     ) {
-        let count = scene.triangle_count;
+        let count = prims.count;
         let (gx, gy) = dispatch_grid(ctx, count, WORKGROUP);
         let params = uniform_buffer(
             ctx,
@@ -94,7 +91,7 @@ impl BoundsRefit {
             layout: &self.pipeline.get_bind_group_layout(0),
             entries: &[
                 bind_entry(0, &params),
-                bind_entry(1, &scene.triangles),
+                bind_entry(1, prims.boxes),
                 bind_entry(2, &scene.prim_indices),
                 bind_entry(3, parents),
                 bind_entry(4, &scene.nodes),

@@ -7,7 +7,9 @@ use bytemuck::{Pod, Zeroable};
 
 use super::dp::CostModel;
 use super::optimize::TreeletState;
-use crate::gpu::{bind_entry, compute_pipeline, dispatch_grid, uniform_buffer, GpuContext};
+use crate::gpu::{
+    bind_entry, compute_pipeline, dispatch_grid, storage_buffer_zeroed, uniform_buffer, GpuContext,
+};
 use crate::sort::PrefixScan;
 use crate::trace::GpuScene;
 use crate::Result;
@@ -23,7 +25,9 @@ struct CollapseParams {
     ct: f32,
     /// Always 0: keeps the kernel's products unfused (see `unfused` in the shader).
     zero: u32,
-    _pad: [u32; 3],
+    /// 1 when the primitives are pre-split references mapped through `ref_tris`.
+    has_refs: u32,
+    _pad: [u32; 2],
 }
 const _: () = assert!(std::mem::size_of::<CollapseParams>() == 32);
 
@@ -32,7 +36,7 @@ const _: () = assert!(std::mem::size_of::<CollapseParams>() == 32);
 struct CompactParams {
     node_count: u32,
     row_pitch: u32,
-    prim_count: u32,
+    has_refs: u32,
     _pad: u32,
 }
 const _: () = assert!(std::mem::size_of::<CompactParams>() == 16);
@@ -45,21 +49,26 @@ pub(crate) struct CollapseBuffers<'a> {
     pub out_nodes: &'a wgpu::Buffer,
     pub out_prims: &'a wgpu::Buffer,
     pub tree_counts: &'a wgpu::Buffer,
+    /// Triangle of each pre-split reference; None when primitives are triangles.
+    pub ref_tris: Option<&'a wgpu::Buffer>,
 }
 
 pub(crate) struct Collapse {
     mark: wgpu::ComputePipeline,
     compact: wgpu::ComputePipeline,
     scan: PrefixScan,
+    /// Bound as `ref_tris` when there are no references (the kernels then never read it).
+    no_refs: wgpu::Buffer,
 }
 
 impl Collapse {
-    pub fn new(ctx: &GpuContext) -> Self {
-        Self {
+    pub fn new(ctx: &GpuContext) -> Result<Self> {
+        Ok(Self {
             mark: compute_pipeline(ctx, "nodes_mark.wgsl", "main"),
             compact: compute_pipeline(ctx, "nodes_compact.wgsl", "main"),
             scan: PrefixScan::new(ctx),
-        }
+            no_refs: storage_buffer_zeroed(ctx, "no references", 4)?,
+        })
     }
 
     /// Records the collapse of the working tree in `scene` into `out`.
@@ -72,8 +81,10 @@ impl Collapse {
         model: &CostModel,
         out: &CollapseBuffers<'_>,
     ) -> Result<()> {
-        let n = scene.triangle_count;
+        let n = scene.prim_count;
         let node_count = 2 * n - 1;
+        let has_refs = u32::from(out.ref_tris.is_some());
+        let ref_tris = out.ref_tris.unwrap_or(&self.no_refs);
         let (gx, gy) = dispatch_grid(ctx, node_count, WORKGROUP);
         let mark_params = uniform_buffer(
             ctx,
@@ -84,7 +95,8 @@ impl Collapse {
                 max_leaf_size: model.max_leaf_size,
                 ct: model.ct,
                 zero: 0,
-                _pad: [0; 3],
+                has_refs,
+                _pad: [0; 2],
             },
         );
         let mark = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -99,6 +111,8 @@ impl Collapse {
                 bind_entry(5, out.flags),
                 bind_entry(6, out.kept_scan),
                 bind_entry(7, out.leaf_prim_scan),
+                bind_entry(8, &scene.prim_indices),
+                bind_entry(9, ref_tris),
             ],
         });
         let kept_plan = self.scan.plan(ctx, out.kept_scan, node_count)?;
@@ -109,7 +123,7 @@ impl Collapse {
             &CompactParams {
                 node_count,
                 row_pitch: gx * WORKGROUP,
-                prim_count: n,
+                has_refs,
                 _pad: 0,
             },
         );
@@ -120,13 +134,14 @@ impl Collapse {
                 bind_entry(0, &compact_params),
                 bind_entry(1, &scene.nodes),
                 bind_entry(2, &scene.prim_indices),
-                bind_entry(3, state.prim_counts),
                 bind_entry(4, out.flags),
                 bind_entry(5, out.kept_scan),
                 bind_entry(6, out.leaf_prim_scan),
                 bind_entry(7, out.out_nodes),
                 bind_entry(8, out.out_prims),
                 bind_entry(9, out.tree_counts),
+                bind_entry(10, ref_tris),
+                bind_entry(11, self.scan.total()),
             ],
         });
         pass.set_pipeline(&self.mark);

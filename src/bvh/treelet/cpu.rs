@@ -161,13 +161,41 @@ impl WorkingTree {
                 && model.ct * self.area(node) * n as f32 <= self.costs[node as usize])
     }
 
+    /// The primitives under `node` depth-first, left first. With pre-split references
+    /// (`ref_tris[r]` = triangle of reference r) they become triangle ids, each kept once (first
+    /// occurrence): a leaf references a triangle at most once.
+    fn gather(&self, node: u32, ref_tris: Option<&[u32]>) -> Vec<u32> {
+        let mut out = Vec::new();
+        let mut stack = vec![node];
+        while let Some(x) = stack.pop() {
+            let w = self.nodes[x as usize];
+            if w.is_leaf() {
+                let first = w.left_or_first as usize;
+                for &p in &self.prims[first..first + w.prim_count() as usize] {
+                    match ref_tris {
+                        Some(tris) => {
+                            let t = tris[p as usize];
+                            if !out.contains(&t) {
+                                out.push(t);
+                            }
+                        }
+                        None => out.push(p),
+                    }
+                }
+            } else {
+                stack.extend([w.right_or_count, w.left_or_first]);
+            }
+        }
+        out
+    }
+
     /// Collapse and compaction (the kernels `nodes_mark.wgsl` + scans + `nodes_compact.wgsl`):
     /// kept nodes keep their relative order, output leaves gather their subtree's primitives
-    /// depth-first, left first.
-    pub fn collapse(&self, model: &CostModel) -> Bvh {
+    /// depth-first, left first (mapped to unique triangle ids when `ref_tris` is given).
+    pub fn collapse(&self, model: &CostModel, ref_tris: Option<&[u32]>) -> Bvh {
         let count = self.nodes.len();
         let mut kept = vec![false; count];
-        let mut leaf = vec![false; count];
+        let mut leaf_prims: Vec<Option<Vec<u32>>> = vec![None; count];
         for i in 0..count as u32 {
             let mut x = i;
             let mut keep = true;
@@ -179,7 +207,9 @@ impl WorkingTree {
                 }
             }
             kept[i as usize] = keep;
-            leaf[i as usize] = keep && self.collapses(i, model);
+            if keep && self.collapses(i, model) {
+                leaf_prims[i as usize] = Some(self.gather(i, ref_tris));
+            }
         }
         let mut new_index = vec![0u32; count];
         let mut leaf_first = vec![0u32; count];
@@ -188,38 +218,25 @@ impl WorkingTree {
             new_index[i] = nodes_out;
             leaf_first[i] = prims_out;
             nodes_out += u32::from(kept[i]);
-            if leaf[i] {
-                prims_out += self.prim_counts[i];
-            }
+            prims_out += leaf_prims[i].as_ref().map_or(0, |p| p.len() as u32);
         }
         let mut nodes = vec![BvhNode::leaf(crate::geometry::Aabb::EMPTY, 0, 0); nodes_out as usize];
-        let mut prim_indices = vec![0u32; prims_out as usize];
+        let mut prim_indices = Vec::with_capacity(prims_out as usize);
         for i in 0..count {
             if !kept[i] {
                 continue;
             }
             let n = self.nodes[i];
-            let out = &mut nodes[new_index[i] as usize];
-            if leaf[i] {
-                let mut written = leaf_first[i] as usize;
-                let mut stack = vec![i as u32];
-                while let Some(x) = stack.pop() {
-                    let w = self.nodes[x as usize];
-                    if w.is_leaf() {
-                        let first = w.left_or_first as usize;
-                        for &p in &self.prims[first..first + w.prim_count() as usize] {
-                            prim_indices[written] = p;
-                            written += 1;
-                        }
-                    } else {
-                        stack.extend([w.right_or_count, w.left_or_first]);
-                    }
+            nodes[new_index[i] as usize] = match &leaf_prims[i] {
+                Some(prims) => {
+                    prim_indices.extend_from_slice(prims);
+                    BvhNode::leaf(n.bounds(), leaf_first[i], prims.len() as u32)
                 }
-                *out = BvhNode::leaf(n.bounds(), leaf_first[i], self.prim_counts[i]);
-            } else {
-                let (l, r) = n.children();
-                *out = BvhNode::internal(n.bounds(), new_index[l as usize], new_index[r as usize]);
-            }
+                None => {
+                    let (l, r) = n.children();
+                    BvhNode::internal(n.bounds(), new_index[l as usize], new_index[r as usize])
+                }
+            };
         }
         Bvh {
             nodes,

@@ -19,13 +19,12 @@ pub use dp::{
 use collapse::{Collapse, CollapseBuffers};
 use optimize::{Round, TreeletOptimizer, TreeletState};
 
-use super::lbvh::{
-    build_lbvh_cpu, centroid_bounds_cpu, hierarchy_cpu, morton_keys_cpu, LbvhBuilder, MORTON_BITS,
-};
+use super::lbvh::{build_lbvh_from_boxes_cpu, prim_boxes_cpu, LbvhBuilder};
+use super::presplit::{presplit_cpu, split_budget, PreSplitter};
 use super::{Bvh, BvhNode, SahParams};
+use crate::geometry::Aabb;
 use crate::gpu::{read_buffer, storage_buffer_zeroed, GpuContext, GpuTimer, StageTime};
 use crate::scene::Triangle;
-use crate::sort::sort_pairs_cpu;
 use crate::trace::GpuScene;
 use crate::{Error, Result};
 
@@ -39,6 +38,9 @@ pub struct TreeletSettings {
     pub treelet_size: u32,
     /// Restructuring rounds (γ = treelet_size, doubled each round); 0 = LBVH + collapse only.
     pub rounds: u32,
+    /// Triangle pre-splitting budget β in percent of the triangle count (0 disables; §5 of the
+    /// paper, which uses 30).
+    pub split_percent: u32,
 }
 
 impl TreeletSettings {
@@ -46,16 +48,19 @@ impl TreeletSettings {
     pub const FAST: Self = Self {
         treelet_size: 5,
         rounds: 1,
+        split_percent: 0,
     };
     /// The paper's reference setting: treelets of 7 leaves, 3 rounds.
     pub const BALANCED: Self = Self {
         treelet_size: 7,
         rounds: 3,
+        split_percent: 0,
     };
     /// Largest treelets the kernel supports, more rounds.
     pub const HIGH_QUALITY: Self = Self {
         treelet_size: 8,
         rounds: 4,
+        split_percent: 0,
     };
 
     /// A preset by name: `fast`, `balanced` or `high`.
@@ -82,6 +87,12 @@ impl TreeletSettings {
             return Err(Error::InvalidArgument(format!(
                 "max leaf size must be 1..={MAX_GPU_LEAF_SIZE} for the GPU treelet builder, got {}",
                 sah.max_leaf_size
+            )));
+        }
+        if self.split_percent > 100 {
+            return Err(Error::InvalidArgument(format!(
+                "split budget must be 0..=1 (0..=100 %), got {} %",
+                self.split_percent
             )));
         }
         if self.rounds > 16 {
@@ -121,7 +132,21 @@ impl Default for TreeletSettings {
 
 /// CPU twin of the whole GPU TRBVH build.
 pub fn build_trbvh_cpu(triangles: &[Triangle], settings: &TreeletSettings, sah: &SahParams) -> Bvh {
-    optimize_cpu(triangles, settings, sah).collapse(&cost_model(sah))
+    optimize_cpu(triangles, settings, sah).collapse(&cost_model(sah), None)
+}
+
+/// CPU twin of the whole GPU TRBVH build with triangle pre-splitting (`settings.split_percent`).
+pub fn build_trbvh_split_cpu(
+    triangles: &[Triangle],
+    settings: &TreeletSettings,
+    sah: &SahParams,
+) -> Bvh {
+    let budget = split_budget(triangles.len() as u32, settings.split_percent);
+    if budget == 0 {
+        return build_trbvh_cpu(triangles, settings, sah);
+    }
+    let (boxes, ref_tris) = presplit_cpu(triangles, budget);
+    optimize_prims_cpu(&boxes, settings, sah).collapse(&cost_model(sah), Some(&ref_tris))
 }
 
 /// CPU twin up to the end of the rounds (the working tree before the collapse).
@@ -130,14 +155,17 @@ pub fn optimize_cpu(
     settings: &TreeletSettings,
     sah: &SahParams,
 ) -> WorkingTree {
-    let bounds = centroid_bounds_cpu(triangles);
-    let keys = morton_keys_cpu(triangles, &bounds);
-    let values: Vec<u32> = (0..triangles.len() as u32).collect();
-    let (sorted_keys, _) = sort_pairs_cpu(&keys, &values, MORTON_BITS);
-    let mut tree = WorkingTree::from_lbvh(
-        build_lbvh_cpu(triangles),
-        hierarchy_cpu(&sorted_keys).parents,
-    );
+    optimize_prims_cpu(&prim_boxes_cpu(triangles), settings, sah)
+}
+
+/// CPU twin of the rounds over primitive boxes (pre-split references or triangle boxes).
+pub fn optimize_prims_cpu(
+    prim_boxes: &[Aabb],
+    settings: &TreeletSettings,
+    sah: &SahParams,
+) -> WorkingTree {
+    let (lbvh, parents) = build_lbvh_from_boxes_cpu(prim_boxes);
+    let mut tree = WorkingTree::from_lbvh(lbvh, parents);
     let model = cost_model(sah);
     for gamma in settings.gammas() {
         tree.optimize_round(&model, settings.treelet_size, gamma);
@@ -191,6 +219,7 @@ pub struct TrbvhStages {
 /// GPU TRBVH builder: LBVH + treelet rounds + collapse, pipelines and scratch reused per frame.
 pub struct TrbvhBuilder {
     lbvh: LbvhBuilder,
+    presplit: Option<PreSplitter>,
     optimizer: TreeletOptimizer,
     collapse: Collapse,
     scratch: Option<Scratch>,
@@ -203,8 +232,9 @@ impl TrbvhBuilder {
         settings.validate(&sah)?;
         Ok(Self {
             lbvh: LbvhBuilder::new(ctx),
+            presplit: None,
             optimizer: TreeletOptimizer::new(ctx),
-            collapse: Collapse::new(ctx),
+            collapse: Collapse::new(ctx)?,
             scratch: None,
             settings,
             sah,
@@ -234,9 +264,25 @@ impl TrbvhBuilder {
     ) -> Result<(Vec<StageTime>, Option<WorkingTree>)> {
         self.settings.validate(&self.sah)?;
         let gammas = self.settings.gammas();
-        let mut timer = GpuTimer::new(ctx, 6 + gammas.len() as u32);
+        let mut timer = GpuTimer::new(ctx, 8 + gammas.len() as u32);
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        let n = self.lbvh.record(ctx, &mut encoder, scene, &mut timer)?;
+        let budget = split_budget(scene.triangle_count, self.settings.split_percent);
+        let n = if budget == 0 {
+            self.lbvh.record(ctx, &mut encoder, scene, &mut timer)?
+        } else {
+            // Split counts, then (after reading the reference count back) the split and the LBVH
+            // over the references.
+            let splitter = self.presplit.get_or_insert_with(|| PreSplitter::new(ctx));
+            splitter.record_counts(ctx, &mut encoder, scene, budget, &mut timer)?;
+            ctx.queue.submit([encoder.finish()]);
+            let total = splitter.read_total(ctx)?;
+            encoder = ctx.device.create_command_encoder(&Default::default());
+            self.lbvh.reserve(ctx, total)?;
+            let prim_boxes = self.lbvh.prim_boxes().expect("reserved");
+            splitter.record_split(ctx, &mut encoder, scene, total, prim_boxes, &mut timer)?;
+            self.lbvh
+                .record_prims(ctx, &mut encoder, scene, total, &mut timer)?
+        };
         if self.scratch.as_ref().is_none_or(|s| s.capacity < n) {
             self.scratch = None;
             self.scratch = Some(Scratch::new(ctx, n)?);
@@ -284,6 +330,11 @@ impl TrbvhBuilder {
                 out_nodes: &scratch.out_nodes,
                 out_prims: &scratch.out_prims,
                 tree_counts: &scratch.tree_counts,
+                ref_tris: if budget == 0 {
+                    None
+                } else {
+                    self.presplit.as_ref().and_then(PreSplitter::ref_tris)
+                },
             };
             self.collapse
                 .record(ctx, &mut pass, scene, &state, &model, &out)?;

@@ -8,7 +8,7 @@ use super::dp::CostModel;
 use crate::gpu::{bind_entry, compute_pipeline, dispatch_grid, uniform_buffer, GpuContext};
 use crate::trace::GpuScene;
 
-const WORKGROUP: u32 = 64;
+const WORKGROUP: u32 = 32;
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -62,7 +62,7 @@ impl TreeletOptimizer {
         state: &TreeletState<'_>,
         round: &Round,
     ) {
-        let count = scene.triangle_count;
+        let count = scene.prim_count;
         let (gx, gy) = dispatch_grid(ctx, count, WORKGROUP);
         let params = uniform_buffer(
             ctx,

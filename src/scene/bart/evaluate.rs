@@ -121,6 +121,21 @@ impl BartScene {
         &self.materials
     }
 
+    /// The camera at time `t`, as `to_scene(t)` sets it (the triangles are evaluated only for a
+    /// file without a view, whose camera frames their bounds).
+    pub fn camera(&self, t: f32) -> Camera {
+        if self.view.is_some() {
+            self.camera_at(f64::from(t), &Aabb::EMPTY)
+        } else {
+            self.to_scene(t).camera
+        }
+    }
+
+    /// The background colour (`b`), used as the sky; white without one.
+    pub fn sky(&self) -> Vec3 {
+        self.sky
+    }
+
     /// Writes the scene's triangles at time `t` into `out` (cleared first): always
     /// `triangle_count()` triangles in the same order with the same materials, so consecutive
     /// frames can refit one BVH. Triangles under a transform that is invisible at `t` (a

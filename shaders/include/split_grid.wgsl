@@ -1,0 +1,57 @@
+// The Morton grid of triangle pre-splitting (Karras & Aila 2013, §5): a cubic grid of 2^21 cells
+// per axis over the scene box (cell size from its longest side, as the LBVH keys). The including
+// kernel declares `scene_bounds` (the scene box at [0], from the box reduction) and `params.zero`
+// (always 0, see `unfused`).
+
+const GRID: f32 = 2097152.0;
+const GRID_MAX: f32 = 2097151.0;
+const NO_BIT: u32 = 0xffffffffu;
+
+// XOR with a zero the compiler cannot see keeps a product out of FMA contraction, so sums round
+// exactly as in the CPU twin.
+fn unfused(x: f32) -> f32 {
+    return bitcast<f32>(bitcast<u32>(x) ^ params.zero);
+}
+
+struct SplitGrid {
+    scene_min: vec3<f32>,
+    // Cells per unit and units per cell.
+    scale: f32,
+    cell: f32,
+}
+
+fn split_grid() -> SplitGrid {
+    let b = scene_bounds[0];
+    let e = b.max - b.min;
+    let extent = max(e.x, max(e.y, e.z));
+    if extent > 0.0 {
+        return SplitGrid(b.min, GRID / extent, extent / GRID);
+    }
+    return SplitGrid(b.min, 0.0, 0.0);
+}
+
+fn quantize(grid: SplitGrid, p: vec3<f32>) -> vec3<u32> {
+    return vec3<u32>(clamp((p - grid.scene_min) * grid.scale, vec3<f32>(0.0), vec3<f32>(GRID_MAX)));
+}
+
+// Highest bit in which the Morton codes of two grid points differ (bit 3k+2 is x's bit k, 3k+1
+// y's, 3k z's), or NO_BIT when they are in the same cell. Computed per axis: the highest
+// differing coordinate bit k on axis a is Morton bit 3k + 2 - a.
+fn highest_differing_bit(a: vec3<u32>, b: vec3<u32>) -> u32 {
+    var best = NO_BIT;
+    for (var axis = 0u; axis < 3u; axis++) {
+        let x = a[axis] ^ b[axis];
+        if x != 0u {
+            let bit = 3u * (31u - countLeadingZeros(x)) + 2u - axis;
+            if best == NO_BIT || bit > best {
+                best = bit;
+            }
+        }
+    }
+    return best;
+}
+
+fn box_area(lo: vec3<f32>, hi: vec3<f32>) -> f32 {
+    let e = hi - lo;
+    return 2.0 * (unfused(e.x * e.y) + unfused(e.y * e.z) + unfused(e.z * e.x));
+}

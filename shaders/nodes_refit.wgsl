@@ -1,0 +1,122 @@
+// Refit of a fixed tree (src/anim/refit.rs): the topology (child links, leaf ranges, prim_indices)
+// stays that of the tree built at the first frame; only the boxes follow the moved triangles. Any
+// tree in the node layout works (LBVH, or a TRBVH tree after collapse and compaction, leaves of
+// several primitives) given its parent links and the list of its leaves.
+//
+// The scheme and its memory ordering are those of bounds_refit.wgsl (Karras 2012 §4): one
+// invocation per leaf stores the leaf's box (union of its triangles) and climbs parent links; a
+// per-node atomic counter lets only the second arrival merge both children and go on. Boxes are
+// stored and loaded as atomics (`node_words`: 8 words per BvhNode) and storageBarriers order the
+// box stores before the counter increment (release) and the increment before the sibling's box
+// loads (acquire); every invocation of a workgroup steps the climb loop together (barriers need
+// uniform control flow). Child and leaf words are only read. Counters must start at zero.
+#include "bvh_node.wgsl"
+
+const WORKGROUP: u32 = 64u;
+
+struct RefitParams {
+    leaf_count: u32,
+    row_pitch: u32,
+    pad0: u32,
+    pad1: u32,
+}
+
+@group(0) @binding(0) var<uniform> params: RefitParams;
+@group(0) @binding(1) var<storage, read> triangles: array<Triangle>;
+@group(0) @binding(2) var<storage, read> prim_indices: array<u32>;
+@group(0) @binding(3) var<storage, read> leaves: array<u32>;
+@group(0) @binding(4) var<storage, read> parents: array<u32>;
+@group(0) @binding(5) var<storage, read_write> node_words: array<atomic<u32>>;
+@group(0) @binding(6) var<storage, read_write> arrivals: array<atomic<u32>>;
+
+var<workgroup> climbing: atomic<u32>;
+var<workgroup> any_climbing: u32;
+
+fn store_box(node: u32, lo: vec3<f32>, hi: vec3<f32>) {
+    let w = node * 8u;
+    atomicStore(&node_words[w + 0u], bitcast<u32>(lo.x));
+    atomicStore(&node_words[w + 1u], bitcast<u32>(lo.y));
+    atomicStore(&node_words[w + 2u], bitcast<u32>(lo.z));
+    atomicStore(&node_words[w + 4u], bitcast<u32>(hi.x));
+    atomicStore(&node_words[w + 5u], bitcast<u32>(hi.y));
+    atomicStore(&node_words[w + 6u], bitcast<u32>(hi.z));
+}
+
+fn load_min(node: u32) -> vec3<f32> {
+    let w = node * 8u;
+    return vec3<f32>(
+        bitcast<f32>(atomicLoad(&node_words[w + 0u])),
+        bitcast<f32>(atomicLoad(&node_words[w + 1u])),
+        bitcast<f32>(atomicLoad(&node_words[w + 2u])),
+    );
+}
+
+fn load_max(node: u32) -> vec3<f32> {
+    let w = node * 8u;
+    return vec3<f32>(
+        bitcast<f32>(atomicLoad(&node_words[w + 4u])),
+        bitcast<f32>(atomicLoad(&node_words[w + 5u])),
+        bitcast<f32>(atomicLoad(&node_words[w + 6u])),
+    );
+}
+
+@compute @workgroup_size(WORKGROUP)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let j = gid.x + gid.y * params.row_pitch;
+    var node = 0u;
+    var is_climbing = false;
+    if lid == 0u {
+        atomicStore(&climbing, 0u);
+    }
+    workgroupBarrier();
+    if j < params.leaf_count {
+        node = leaves[j];
+        let first = atomicLoad(&node_words[node * 8u + 3u]);
+        let count = atomicLoad(&node_words[node * 8u + 7u]) & ~LEAF_FLAG;
+        var lo = vec3<f32>(3.40282347e38);
+        var hi = vec3<f32>(-3.40282347e38);
+        for (var c = 0u; c < count; c++) {
+            let t = triangles[prim_indices[first + c]];
+            lo = min(lo, min(t.v0, min(t.v1, t.v2)));
+            hi = max(hi, max(t.v0, max(t.v1, t.v2)));
+        }
+        store_box(node, lo, hi);
+        is_climbing = node != 0u;
+        if is_climbing {
+            atomicAdd(&climbing, 1u);
+        }
+    }
+    loop {
+        // Release: this node's box is stored before the parent's counter is incremented.
+        storageBarrier();
+        var parent = 0u;
+        if is_climbing {
+            parent = parents[node];
+            if atomicAdd(&arrivals[parent], 1u) == 0u {
+                // First arrival: the sibling's invocation will finish the parent.
+                is_climbing = false;
+                atomicSub(&climbing, 1u);
+            }
+        }
+        // Acquire: the sibling's box, stored before its increment, is visible now.
+        storageBarrier();
+        if is_climbing {
+            let w = parent * 8u;
+            let left = atomicLoad(&node_words[w + 3u]);
+            let right = atomicLoad(&node_words[w + 7u]);
+            store_box(parent, min(load_min(left), load_min(right)), max(load_max(left), load_max(right)));
+            node = parent;
+            if node == 0u {
+                is_climbing = false;
+                atomicSub(&climbing, 1u);
+            }
+        }
+        workgroupBarrier();
+        if lid == 0u {
+            any_climbing = atomicLoad(&climbing);
+        }
+        if workgroupUniformLoad(&any_climbing) == 0u {
+            break;
+        }
+    }
+}

@@ -1,0 +1,55 @@
+// Pre-splitting step 1 (Karras & Aila 2013, §5): each triangle's split priority, kept as its cube
+//     q = 2^i · (A_aabb − A_ideal),   p = q^(1/3)
+// with i = (highest differing Morton bit of the box corners) / 3 − 20 (≤ 0; larger boxes in the
+// Morton hierarchy matter more), A_aabb the box's surface area and A_ideal = |d1×d2|₁ the area its
+// boxes approach under infinitely many splits. Keeping q (no cube root) makes the split counts
+// exact integers shared with the CPU twin. Also the largest q (atomicMax on the bits of a
+// non-negative float) for the budget search.
+#include "bvh_node.wgsl"
+#include "aabb.wgsl"
+
+struct SplitParams {
+    count: u32,
+    row_pitch: u32,
+    zero: u32,
+    pad: u32,
+}
+
+@group(0) @binding(0) var<uniform> params: SplitParams;
+@group(0) @binding(1) var<storage, read> triangles: array<Triangle>;
+@group(0) @binding(2) var<storage, read_write> priorities: array<f32>;
+// [0]: bits of the largest priority
+@group(0) @binding(3) var<storage, read_write> budget_state: array<atomic<u32>>;
+
+// [0]: the scene box
+@group(0) @binding(6) var<storage, read> scene_bounds: array<Aabb>;
+
+#include "split_grid.wgsl"
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x + gid.y * params.row_pitch;
+    if i >= params.count {
+        return;
+    }
+    let t = triangles[i];
+    let lo = min(t.v0, min(t.v1, t.v2));
+    let hi = max(t.v0, max(t.v1, t.v2));
+    let grid = split_grid();
+    let bit = highest_differing_bit(quantize(grid, lo), quantize(grid, hi));
+    var q = 0.0;
+    if bit != NO_BIT {
+        let d1 = t.v1 - t.v0;
+        let d2 = t.v2 - t.v0;
+        let c = vec3<f32>(
+            unfused(d1.y * d2.z) - unfused(d1.z * d2.y),
+            unfused(d1.z * d2.x) - unfused(d1.x * d2.z),
+            unfused(d1.x * d2.y) - unfused(d1.y * d2.x),
+        );
+        let ideal = abs(c.x) + abs(c.y) + abs(c.z);
+        let importance = i32(bit / 3u) - 20;
+        q = ldexp(max(box_area(lo, hi) - ideal, 0.0), importance);
+    }
+    priorities[i] = q;
+    atomicMax(&budget_state[0], bitcast<u32>(q));
+}

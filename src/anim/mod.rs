@@ -1,0 +1,132 @@
+//! Animated scenes, rebuilt every frame: a scene source that produces its triangles for any time t
+//! with FIXED topology (the same count, order and materials every frame), and updates the
+//! triangle buffer of a `GpuScene` in place. The per-frame pipeline is animate → build the BVH on
+//! the GPU (any GPU builder, or the refit-only mode) → trace.
+//!
+//! Sources:
+//! * built-in procedural animations, computed by one GPU kernel each per frame
+//!   (`shaders/<data>_animate.wgsl`), each with a CPU twin (`Animation::evaluate`) that tests compare
+//!   the GPU output with: a waving flag (`cloth`), rigid bodies moving through a static room
+//!   (`bodies`) and an exploding mesh whose triangles fly apart (`debris`, the case that defeats
+//!   refitting);
+//! * BART scenes (`bart`): the keyframe hierarchies are evaluated on the CPU
+//!   (`BartScene::evaluate`) and uploaded every frame with `queue.write_buffer` — the animate
+//!   stage is a CPU evaluation + upload, while the BVH build stays on the GPU;
+//! * OBJ sequences (`obj_sequence`): a folder of frame OBJs with identical topology, interpolated
+//!   linearly between frames on the CPU and uploaded.
+//!
+//! `registry` names them all; `refit` is the refit-only tree update (the LBVH topology of the
+//! first frame, boxes refitted on the GPU every frame) and `update_mode` chooses between it and
+//! the per-frame rebuild. `kernel` runs the animation kernels, `meshes` makes the procedural
+//! geometry, `time_range` is the time axis.
+
+mod bart;
+mod bodies;
+mod cloth;
+mod debris;
+mod kernel;
+mod meshes;
+mod obj_sequence;
+mod refit;
+mod registry;
+mod time_range;
+mod update_mode;
+
+pub use bart::BartAnimation;
+pub use bodies::RigidBodies;
+pub use cloth::Flag;
+pub use debris::Explosion;
+pub use obj_sequence::ObjSequence;
+pub use refit::RefitBuilder;
+pub use registry::{
+    animation_names, is_animation, load_animation, AnimationEntry, AnimationSource, ANIMATIONS,
+    DEFAULT_ANIMATION,
+};
+pub use time_range::TimeRange;
+pub use update_mode::{TreeUpdater, UpdateMode};
+
+use glam::Vec3;
+
+use crate::gpu::{GpuContext, StageTime};
+use crate::scene::{Camera, Material, Scene, Triangle};
+use crate::trace::GpuScene;
+use crate::{Error, Result};
+
+/// Where an animation's per-frame triangles are computed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AnimateStage {
+    /// A compute kernel writes the triangle buffer on the GPU.
+    GpuKernel,
+    /// The triangles are computed on the CPU and uploaded with `queue.write_buffer`.
+    CpuUpload,
+}
+
+impl AnimateStage {
+    pub fn describe(self) -> &'static str {
+        match self {
+            AnimateStage::GpuKernel => "GPU kernel",
+            AnimateStage::CpuUpload => "CPU evaluation + upload",
+        }
+    }
+}
+
+/// A scene whose triangles move with time, with fixed topology.
+///
+/// Contract: `evaluate(t)` always writes `triangle_count()` triangles in the same order with the
+/// same materials; `animate(ctx, t, scene)` leaves in `scene.triangles` what `evaluate(t)` writes
+/// (within float rounding of the GPU's transcendental functions), provided `scene` was uploaded
+/// from `scene_at(t0)` for some t0 (static parts are uploaded once and never rewritten).
+pub trait Animation {
+    fn name(&self) -> &str;
+
+    fn time_range(&self) -> TimeRange;
+
+    /// Triangles in every frame.
+    fn triangle_count(&self) -> usize;
+
+    /// The materials the triangles' `material` fields index (the same at every time).
+    fn materials(&self) -> &[Material];
+
+    /// The camera at time `t` (fixed for the procedural animations; BART scenes animate it).
+    fn camera(&self, t: f32) -> Camera;
+
+    /// Radiance of the sky (see `Scene::sky`).
+    fn sky(&self) -> Vec3;
+
+    /// Where `animate` computes the triangles.
+    fn stage(&self) -> AnimateStage;
+
+    /// Writes the triangles at time `t` into `out` (cleared first), on the CPU: the CPU twin of
+    /// the GPU kernel for procedural animations, the per-frame path for the others.
+    fn evaluate(&self, t: f32, out: &mut Vec<Triangle>);
+
+    /// Updates `scene.triangles` to time `t`; returns the time this took (GPU time of the kernel,
+    /// or the wall-clock time of the CPU evaluation and upload).
+    fn animate(&mut self, ctx: &GpuContext, t: f32, scene: &mut GpuScene) -> Result<StageTime>;
+
+    /// The whole scene at time `t`, on the CPU (first upload, CPU reference builders, tests).
+    fn scene_at(&self, t: f32) -> Scene {
+        let mut triangles = Vec::with_capacity(self.triangle_count());
+        self.evaluate(t, &mut triangles);
+        Scene {
+            name: self.name().to_owned(),
+            triangles,
+            materials: self.materials().to_vec(),
+            camera: self.camera(t),
+            sky: self.sky(),
+        }
+    }
+}
+
+/// Checks that `scene` holds as many triangles as `animation` produces (fixed topology).
+fn check_triangle_count(animation: &dyn Animation, scene: &GpuScene) -> Result<()> {
+    let expected = animation.triangle_count();
+    if scene.triangle_count as usize != expected {
+        return Err(Error::InvalidArgument(format!(
+            "animation '{}' has {expected} triangles, but the GPU scene holds {}",
+            animation.name(),
+            scene.triangle_count
+        )));
+    }
+    Ok(())
+}

@@ -1,0 +1,214 @@
+//! CPU twin of triangle pre-splitting (Karras & Aila 2013, §5; kernels `triangles_priority.wgsl`,
+//! `splits_budget.wgsl`, `triangles_split.wgsl`): the same float operations in the same order, so
+//! split counts match the GPU exactly and boxes to rounding.
+
+use glam::{UVec3, Vec3};
+
+use crate::geometry::Aabb;
+use crate::scene::Triangle;
+
+/// Splits per triangle at most (pieces = splits + 1 ≤ 32).
+pub const MAX_SPLITS: u32 = 31;
+/// Bisection steps of the budget search.
+pub const BISECTION_STEPS: u32 = 40;
+const GRID: f32 = 2_097_152.0;
+const GRID_MAX: f32 = 2_097_151.0;
+
+/// The cubic Morton grid over the scene box.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SplitGrid {
+    pub scene_min: Vec3,
+    /// Cells per unit.
+    pub scale: f32,
+    /// Units per cell.
+    pub cell: f32,
+}
+
+impl SplitGrid {
+    pub fn new(scene: &Aabb) -> Self {
+        let extent = (scene.max - scene.min).max_element();
+        let (scale, cell) = if extent > 0.0 {
+            (GRID / extent, extent / GRID)
+        } else {
+            (0.0, 0.0)
+        };
+        Self {
+            scene_min: scene.min,
+            scale,
+            cell,
+        }
+    }
+
+    fn quantize(&self, p: Vec3) -> UVec3 {
+        let q = ((p - self.scene_min) * self.scale).clamp(Vec3::ZERO, Vec3::splat(GRID_MAX));
+        UVec3::new(q.x as u32, q.y as u32, q.z as u32)
+    }
+}
+
+/// Highest differing Morton bit of two grid points (see `split_grid.wgsl`).
+fn highest_differing_bit(a: UVec3, b: UVec3) -> Option<u32> {
+    (0..3)
+        .filter_map(|axis| {
+            let x = a[axis] ^ b[axis];
+            (x != 0).then(|| 3 * (31 - x.leading_zeros()) + 2 - axis as u32)
+        })
+        .max()
+}
+
+fn box_area(lo: Vec3, hi: Vec3) -> f32 {
+    let e = hi - lo;
+    2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
+}
+
+/// q = p³ of one triangle (see `triangles_priority.wgsl`).
+pub fn split_priority(t: &Triangle, grid: &SplitGrid) -> f32 {
+    let [v0, v1, v2] = t.vertices();
+    let (lo, hi) = (v0.min(v1.min(v2)), v0.max(v1.max(v2)));
+    let Some(bit) = highest_differing_bit(grid.quantize(lo), grid.quantize(hi)) else {
+        return 0.0;
+    };
+    let (d1, d2) = (v1 - v0, v2 - v0);
+    let c = Vec3::new(
+        d1.y * d2.z - d1.z * d2.y,
+        d1.z * d2.x - d1.x * d2.z,
+        d1.x * d2.y - d1.y * d2.x,
+    );
+    let ideal = c.x.abs() + c.y.abs() + c.z.abs();
+    let importance = (bit / 3) as i32 - 20;
+    (box_area(lo, hi) - ideal).max(0.0) * 2f32.powi(importance)
+}
+
+/// The largest k ≤ MAX_SPLITS with k³ ≤ e·q.
+pub fn splits_at(e: f32, q: f32) -> u32 {
+    let target = e * q;
+    let mut k = 0u32;
+    while k < MAX_SPLITS {
+        let next = (k + 1) as f32;
+        if next * next * next > target {
+            break;
+        }
+        k += 1;
+    }
+    k
+}
+
+/// E = D³ of the budget search: the bisection of `splits_budget.wgsl`.
+pub fn budget_scale(priorities: &[f32], budget: u32) -> f32 {
+    let q_max = priorities.iter().copied().fold(0.0f32, f32::max);
+    let b = (budget + 1) as f32;
+    let hi0 = if q_max > 0.0 { b * b * b / q_max } else { 0.0 };
+    let (mut lo, mut hi, mut mid) = (0.0f32, hi0, hi0 * 0.5);
+    for _ in 0..BISECTION_STEPS {
+        let sum: u64 = priorities
+            .iter()
+            .map(|&q| u64::from(splits_at(mid, q)))
+            .sum();
+        if sum <= u64::from(budget) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+        mid = (lo + hi) * 0.5;
+    }
+    lo
+}
+
+/// The box of triangle `t` clipped to [lo, hi] (Sutherland–Hodgman), or None if nothing is left.
+fn clip_triangle(t: &Triangle, lo: Vec3, hi: Vec3) -> Option<(Vec3, Vec3)> {
+    let mut poly: Vec<Vec3> = t.vertices().to_vec();
+    for plane in 0..6 {
+        let axis = plane % 3;
+        let keep_below = plane >= 3;
+        let bound = if keep_below { hi[axis] } else { lo[axis] };
+        let inside = |p: Vec3| {
+            if keep_below {
+                p[axis] <= bound
+            } else {
+                p[axis] >= bound
+            }
+        };
+        let mut next = Vec::with_capacity(9);
+        for k in 0..poly.len() {
+            let (a, b) = (poly[k], poly[(k + 1) % poly.len()]);
+            if inside(a) && next.len() < 9 {
+                next.push(a);
+            }
+            if inside(a) != inside(b) && next.len() < 9 {
+                let s = (bound - a[axis]) / (b[axis] - a[axis]);
+                let mut p = a + Vec3::new(s * (b.x - a.x), s * (b.y - a.y), s * (b.z - a.z));
+                p[axis] = bound;
+                next.push(p);
+            }
+        }
+        poly = next;
+    }
+    if poly.is_empty() {
+        return None;
+    }
+    let (mut plo, mut phi) = (Vec3::splat(f32::MAX), Vec3::splat(-f32::MAX));
+    for p in &poly {
+        plo = plo.min(*p);
+        phi = phi.max(*p);
+    }
+    Some((plo.clamp(lo, hi), phi.clamp(lo, hi)))
+}
+
+/// The `pieces` reference boxes of triangle `t` (see `triangles_split.wgsl`).
+pub fn split_triangle(t: &Triangle, pieces: u32, grid: &SplitGrid) -> Vec<Aabb> {
+    const MAX_PIECES: usize = 32;
+    let mut out = Vec::with_capacity(pieces as usize);
+    let [v0, v1, v2] = t.vertices();
+    let mut stack = vec![(v0.min(v1.min(v2)), v0.max(v1.max(v2)), pieces)];
+    while let Some((lo, hi, n)) = stack.pop() {
+        let mut halves = None;
+        if n > 1 && stack.len() + 2 <= MAX_PIECES {
+            if let Some(bit) = highest_differing_bit(grid.quantize(lo), grid.quantize(hi)) {
+                let axis = (2 - bit % 3) as usize;
+                let level = bit / 3;
+                let qb = grid.quantize(hi)[axis];
+                let plane = grid.scene_min[axis] + ((qb >> level) << level) as f32 * grid.cell;
+                let (mut left_hi, mut right_lo) = (hi, lo);
+                left_hi[axis] = plane;
+                right_lo[axis] = plane;
+                if let (Some(l), Some(r)) = (
+                    clip_triangle(t, lo, left_hi),
+                    clip_triangle(t, right_lo, hi),
+                ) {
+                    halves = Some((l, r));
+                }
+            }
+        }
+        match halves {
+            Some((l, r)) => {
+                let (wl, wr) = ((l.1 - l.0).max_element(), (r.1 - r.0).max_element());
+                let share = if wl + wr > 0.0 { wl / (wl + wr) } else { 0.5 };
+                let nl = ((n as f32 * share).round_ties_even() as u32).clamp(1, n - 1);
+                stack.push((r.0, r.1, n - nl));
+                stack.push((l.0, l.1, nl));
+            }
+            None => out.extend((0..n).map(|_| Aabb::new(lo, hi))),
+        }
+    }
+    out
+}
+
+/// The whole pre-splitting stage on the CPU: reference boxes and each reference's triangle, in
+/// triangle order, with at most `budget` extra references.
+pub fn presplit_cpu(triangles: &[Triangle], budget: u32) -> (Vec<Aabb>, Vec<u32>) {
+    let scene = triangles
+        .iter()
+        .fold(Aabb::EMPTY, |b, t| b.union(t.bounds()));
+    let grid = SplitGrid::new(&scene);
+    let priorities: Vec<f32> = triangles.iter().map(|t| split_priority(t, &grid)).collect();
+    let e = budget_scale(&priorities, budget);
+    let mut boxes = Vec::new();
+    let mut tris = Vec::new();
+    for (i, (t, &q)) in triangles.iter().zip(&priorities).enumerate() {
+        let pieces = splits_at(e, q) + 1;
+        for b in split_triangle(t, pieces, &grid) {
+            boxes.push(b);
+            tris.push(i as u32);
+        }
+    }
+    (boxes, tris)
+}

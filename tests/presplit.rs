@@ -1,0 +1,172 @@
+//! Triangle pre-splitting (Karras & Aila 2013, §5): reference boxes are non-empty and inside their
+//! triangle's box and together cover it; the reference count respects the budget; the GPU stage
+//! equals its CPU twin (counts exactly, boxes to rounding); β = 0 gives the trbvh tree exactly;
+//! rays traced through trbvh-split trees equal brute force.
+
+mod common;
+
+use common::{assert_hits_match, gpu, random_soup, test_rays};
+use glam::Vec3;
+use treelet::bvh::presplit::{presplit_cpu, split_budget, PreSplitter};
+use treelet::bvh::treelet::{
+    build_trbvh_cpu, build_trbvh_split_cpu, TrbvhBuilder, TreeletSettings,
+};
+use treelet::bvh::{validate, validate_with_references, SahParams};
+use treelet::geometry::Aabb;
+use treelet::scene::{load_scene, Camera, Material, Scene, Triangle};
+use treelet::trace::{closest_hits, GpuScene};
+
+fn scene_of(triangles: Vec<Triangle>) -> Scene {
+    let bounds = triangles
+        .iter()
+        .fold(Aabb::EMPTY, |b, t| b.union(t.bounds()));
+    Scene {
+        name: "test".into(),
+        triangles,
+        materials: vec![Material::diffuse(Vec3::splat(0.5))],
+        camera: Camera::framing(&bounds),
+        sky: Vec3::ONE,
+    }
+}
+
+/// A scene that needs splitting: long diagonal slivers crossing a field of small triangles.
+fn slivers() -> Vec<Triangle> {
+    let mut tris = random_soup(2000, 5);
+    for i in 0..60 {
+        let y = i as f32 / 60.0;
+        tris.push(Triangle::new(
+            Vec3::new(-1.0, y, -1.0),
+            Vec3::new(2.0, y + 0.01, 2.0),
+            Vec3::new(2.0, y, 1.9),
+            0,
+        ));
+    }
+    tris
+}
+
+fn check_fragments(triangles: &[Triangle], boxes: &[Aabb], ref_tris: &[u32], budget: u32) {
+    assert_eq!(boxes.len(), ref_tris.len());
+    assert!(
+        boxes.len() as u64 <= triangles.len() as u64 + u64::from(budget),
+        "budget exceeded"
+    );
+    let mut union = vec![Aabb::EMPTY; triangles.len()];
+    for (b, &t) in boxes.iter().zip(ref_tris) {
+        let tb = triangles[t as usize].bounds();
+        assert!(!b.is_empty(), "empty fragment box of triangle {t}");
+        assert!(
+            tb.contains(b, 0.0),
+            "fragment {b:?} outside triangle {t}'s box {tb:?}"
+        );
+        union[t as usize] = union[t as usize].union(*b);
+    }
+    for (t, (tri, u)) in triangles.iter().zip(&union).enumerate() {
+        let tb = tri.bounds();
+        let tol = 1e-5 * tb.extent().max_element().max(1e-6);
+        assert!(
+            u.contains(&tb, tol),
+            "fragments of triangle {t} do not cover its box: {u:?} vs {tb:?}"
+        );
+    }
+}
+
+#[test]
+fn cpu_fragments_cover_triangles_within_budget() {
+    for (tris, percent) in [
+        (slivers(), 30),
+        (load_scene("cornell").unwrap().triangles, 50),
+        (random_soup(3000, 3), 10),
+    ] {
+        let budget = split_budget(tris.len() as u32, percent);
+        let (boxes, ref_tris) = presplit_cpu(&tris, budget);
+        check_fragments(&tris, &boxes, &ref_tris, budget);
+    }
+    let tris = slivers();
+    let (boxes, _) = presplit_cpu(&tris, split_budget(tris.len() as u32, 30));
+    assert!(boxes.len() > tris.len(), "slivers were not split");
+}
+
+#[test]
+fn gpu_split_equals_cpu_twin() {
+    let mut splitter = PreSplitter::new(gpu());
+    for (tris, percent) in [
+        (slivers(), 30),
+        (load_scene("field-10k").unwrap().triangles, 50),
+        (load_scene("cornell").unwrap().triangles, 30),
+    ] {
+        let budget = split_budget(tris.len() as u32, percent);
+        let scene = scene_of(tris.clone());
+        let gpu_scene = GpuScene::upload_geometry(gpu(), &scene, 1, 1).unwrap();
+        let (gpu_boxes, gpu_tris) = splitter.split_and_read(gpu(), &gpu_scene, budget).unwrap();
+        let (cpu_boxes, cpu_tris) = presplit_cpu(&tris, budget);
+        assert_eq!(gpu_tris, cpu_tris, "references per triangle");
+        let boxes: Vec<Aabb> = gpu_boxes.into_iter().map(Aabb::from).collect();
+        check_fragments(&tris, &boxes, &gpu_tris, budget);
+        for (g, c) in boxes.iter().zip(&cpu_boxes) {
+            let tol = 1e-5 * c.extent().max_element().max(1e-3);
+            assert!(
+                (g.min - c.min).abs().max_element() <= tol
+                    && (g.max - c.max).abs().max_element() <= tol,
+                "GPU box {g:?} vs CPU {c:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn trbvh_split_trees_are_valid_and_hits_equal_brute_force() {
+    let sah = SahParams::default();
+    let settings = TreeletSettings {
+        split_percent: 30,
+        ..TreeletSettings::BALANCED
+    };
+    let mut builder = TrbvhBuilder::new(gpu(), settings, sah).unwrap();
+    for scene in [
+        scene_of(slivers()),
+        load_scene("cornell").unwrap(),
+        load_scene("field-10k").unwrap(),
+    ] {
+        let mut gpu_scene = GpuScene::upload_geometry(gpu(), &scene, 1, 1).unwrap();
+        builder.build(gpu(), &mut gpu_scene).unwrap();
+        let bvh = gpu_scene.download_bvh(gpu()).unwrap();
+        validate_with_references(&bvh, &scene.triangles).expect("valid trbvh-split tree");
+        let expected = build_trbvh_split_cpu(&scene.triangles, &settings, &sah);
+        assert_eq!(
+            bvh.prim_indices, expected.prim_indices,
+            "{}: references",
+            scene.name
+        );
+        assert_eq!(
+            bvh.nodes.len(),
+            expected.nodes.len(),
+            "{}: node count",
+            scene.name
+        );
+        let rays = test_rays(&scene.triangles, 300, 29);
+        let plain: Vec<_> = rays.iter().map(|(_, r)| *r).collect();
+        let hits = closest_hits(gpu(), &gpu_scene, &plain).unwrap();
+        assert_hits_match(&scene.triangles, &rays, &hits);
+    }
+}
+
+#[test]
+fn zero_budget_gives_the_trbvh_tree() {
+    let sah = SahParams::default();
+    let scene = load_scene("field-10k").unwrap();
+    let settings = TreeletSettings {
+        split_percent: 0,
+        ..TreeletSettings::BALANCED
+    };
+    let mut gpu_scene = GpuScene::upload_geometry(gpu(), &scene, 1, 1).unwrap();
+    TrbvhBuilder::new(gpu(), settings, sah)
+        .unwrap()
+        .build(gpu(), &mut gpu_scene)
+        .unwrap();
+    let bvh = gpu_scene.download_bvh(gpu()).unwrap();
+    validate(&bvh, &scene.triangles).unwrap();
+    assert_eq!(bvh, build_trbvh_cpu(&scene.triangles, &settings, &sah));
+    assert_eq!(
+        bvh,
+        build_trbvh_split_cpu(&scene.triangles, &settings, &sah)
+    );
+}
