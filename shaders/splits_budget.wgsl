@@ -1,5 +1,7 @@
 // Pre-splitting step 2 (Karras & Aila 2013, §5): the split counts s_t = floor(D·p_t) under the
 // budget Σ s_t ≤ β·N, with D found by bisection. With q = p³ and E = D³:
+// (the bisection runs on the bit patterns of E, which order like the non-negative floats they
+// encode: exact integer midpoints, and 32 halvings span the whole float range)
 // s_t = the largest k with k³ ≤ E·q_t (capped at MAX_SPLITS), exact in f32 on both CPU and GPU.
 // Entry points, dispatched in order: `init_search` (one invocation: the search interval [0, hi] with
 // hi = (budget+1)³ / q_max), then per step `count_splits` (per triangle: Σ s_t at the midpoint)
@@ -13,7 +15,7 @@ struct BudgetParams {
     pad: u32,
 }
 
-// [0] largest q (bits), [1] Σ s_t at mid, [2] lo, [3] hi, [4] mid (f32 bits)
+// [0] largest q (bits), [1] Σ s_t at mid, [2] lo, [3] hi, [4] mid (bits of E)
 @group(0) @binding(0) var<uniform> params: BudgetParams;
 @group(0) @binding(1) var<storage, read> priorities: array<f32>;
 @group(0) @binding(2) var<storage, read_write> budget_state: array<atomic<u32>>;
@@ -40,10 +42,6 @@ fn load_f32(i: u32) -> f32 {
     return bitcast<f32>(atomicLoad(&budget_state[i]));
 }
 
-fn store_f32(i: u32, v: f32) {
-    atomicStore(&budget_state[i], bitcast<u32>(v));
-}
-
 @compute @workgroup_size(1)
 fn init_search() {
     let q_max = load_f32(0u);
@@ -52,9 +50,9 @@ fn init_search() {
     if q_max > 0.0 {
         hi = b * b * b / q_max;
     }
-    store_f32(2u, 0.0);
-    store_f32(3u, hi);
-    store_f32(4u, hi * 0.5);
+    atomicStore(&budget_state[2], 0u);
+    atomicStore(&budget_state[3], bitcast<u32>(hi));
+    atomicStore(&budget_state[4], bitcast<u32>(hi) / 2u);
     atomicStore(&budget_state[1], 0u);
 }
 
@@ -76,13 +74,15 @@ fn count_splits(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_in
 
 @compute @workgroup_size(1)
 fn bisect_step() {
-    let mid = load_f32(4u);
+    let mid = atomicLoad(&budget_state[4]);
     if atomicLoad(&budget_state[1]) <= params.budget {
-        store_f32(2u, mid);
+        atomicStore(&budget_state[2], mid);
     } else {
-        store_f32(3u, mid);
+        atomicStore(&budget_state[3], mid);
     }
-    store_f32(4u, (load_f32(2u) + load_f32(3u)) * 0.5);
+    let lo = atomicLoad(&budget_state[2]);
+    let hi = atomicLoad(&budget_state[3]);
+    atomicStore(&budget_state[4], lo + (hi - lo) / 2u);
     atomicStore(&budget_state[1], 0u);
 }
 

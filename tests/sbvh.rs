@@ -151,25 +151,3 @@ fn shared_buddha_is_valid_and_traced_exactly() {
         Err(e) => println!("skipping: shared scenes not available ({e})"),
     }
 }
-
-#[test]
-#[ignore]
-fn tmp_timing() {
-    for name in ["buddha", "sibenik", "conference"] {
-        let scene = load_scene(name).unwrap();
-        let p = SahParams::default();
-        let t = std::time::Instant::now();
-        let sw = build_sweep_sah(&scene.triangles, &p);
-        let a = t.elapsed().as_secs_f64();
-        let t = std::time::Instant::now();
-        let sb = build_sbvh(&scene.triangles, &p);
-        let b = t.elapsed().as_secs_f64();
-        println!(
-            "{name}: n {} sweep {a:.3}s sah {:.3} | sbvh {b:.3}s sah {:.3} refs {}",
-            scene.triangles.len(),
-            sah_cost(&sw, &p),
-            sah_cost(&sb, &p),
-            sb.prim_indices.len()
-        );
-    }
-}

@@ -311,3 +311,17 @@ fn non_obj_file_is_rejected() {
         other => panic!("expected InvalidArgument, got {other:?}"),
     }
 }
+
+#[test]
+fn field_of_any_size_loads_by_name() {
+    let small = treelet::scene::load_scene("field:10").unwrap();
+    assert!(
+        small.triangles.len() >= 200,
+        "{} triangles",
+        small.triangles.len()
+    );
+    for bad in ["field:", "field:x", "field:0", "field:99999"] {
+        let err = treelet::scene::load_scene(bad).unwrap_err();
+        assert!(err.to_string().contains("field:N"), "{bad}: {err}");
+    }
+}

@@ -15,9 +15,9 @@
 //! * OBJ sequences (`obj_sequence`): a folder of frame OBJs with identical topology, interpolated
 //!   linearly between frames on the CPU and uploaded.
 //!
-//! `registry` names them all; `refit` is the refit-only tree update (the LBVH topology of the
-//! first frame, boxes refitted on the GPU every frame) and `update_mode` chooses between it and
-//! the per-frame rebuild. `kernel` runs the animation kernels, `meshes` makes the procedural
+//! `registry` names them all; `refit` is the refit-only tree update (the tree a GPU builder built
+//! at the first frame, LBVH by default, its boxes refitted on the GPU every frame) and
+//! `update_mode` chooses between it and the per-frame rebuild. `kernel` runs the animation kernels, `meshes` makes the procedural
 //! geometry, `time_range` is the time axis.
 
 mod bart;

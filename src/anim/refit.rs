@@ -70,7 +70,6 @@ struct Topology {
 
 /// Builds a scene's tree once with `topology_builder`, then refits its boxes on every call.
 pub struct RefitBuilder {
-    topology_builder: Builder,
     builder: GpuBuilder,
     pipeline: wgpu::ComputePipeline,
     topology: Option<Topology>,
@@ -80,16 +79,10 @@ impl RefitBuilder {
     /// Refits of the trees `topology_builder` (a GPU builder) builds.
     pub fn new(ctx: &GpuContext, topology_builder: Builder, params: &SahParams) -> Result<Self> {
         Ok(Self {
-            topology_builder,
             builder: GpuBuilder::new(ctx, topology_builder, params)?,
             pipeline: compute_pipeline(ctx, "nodes_refit.wgsl", "main"),
             topology: None,
         })
-    }
-
-    /// The builder of the first frame's tree.
-    pub fn topology_builder(&self) -> Builder {
-        self.topology_builder
     }
 
     /// SAH parameters of the next topology build.

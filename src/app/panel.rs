@@ -323,15 +323,22 @@ fn animation(
     }
     let (rebuild, refit) = info.history.series();
     let (rebuild_label, refit_label) = &info.history.labels;
+    // The data changes every frame: set the y range from it (auto bounds lag a frame behind).
+    let top = rebuild
+        .iter()
+        .chain(&refit)
+        .map(|p| p[1])
+        .fold(1.0, f64::max);
     egui_plot::Plot::new("sah_over_time")
         .height(130.0)
-        .legend(egui_plot::Legend::default())
+        .legend(egui_plot::Legend::default().position(egui_plot::Corner::LeftTop))
         .allow_zoom(false)
         .allow_drag(false)
         .allow_scroll(false)
         .include_x(f64::from(range.start))
         .include_x(f64::from(range.end))
         .include_y(0.0)
+        .include_y(top * 1.05)
         .x_axis_label("t")
         .y_axis_label("SAH")
         .show(ui, |plot| {

@@ -7,7 +7,7 @@
 
 use std::collections::VecDeque;
 
-use egui_plot::{Legend, Line, Plot, PlotPoints};
+use egui_plot::{HoverPosition, Line, Plot, PlotPoints};
 
 use crate::bvh::{Builder, SahParams};
 use crate::gpu::GpuContext;
@@ -105,12 +105,18 @@ impl TradeoffPanel {
         self.plot(ui);
         ui.label(egui::RichText::new("best configuration by rays per frame").strong());
         for range in &self.best {
-            ui.label(format!(
+            let i = self
+                .measurements
+                .iter()
+                .position(|m| m.label == range.label)
+                .unwrap_or(0);
+            let text = format!(
                 "{} – {}: {}",
                 rays_label(range.from_rays),
                 rays_label(range.to_rays),
                 range.label
-            ));
+            );
+            Self::swatch(ui, i, text);
         }
         egui::CollapsingHeader::new("measurements").show(ui, |ui| {
             egui::Grid::new("tradeoff_measurements")
@@ -120,9 +126,9 @@ impl TradeoffPanel {
                         ui.strong(heading);
                     }
                     ui.end_row();
-                    for m in &self.measurements {
+                    for (i, m) in self.measurements.iter().enumerate() {
                         let kind = if m.gpu { "" } else { " (CPU)" };
-                        ui.label(format!("{}{kind}", m.label));
+                        Self::swatch(ui, i, format!("{}{kind}", m.label));
                         ui.label(format!("{:.2}", m.build_ms));
                         ui.label(format!("{:.2}", m.sah));
                         ui.label(format!("{:.2}", m.mrays_per_s));
@@ -132,26 +138,55 @@ impl TradeoffPanel {
         });
     }
 
-    /// Effective Mrays/s against log10(rays per frame).
+    /// Effective Mrays/s against log10(rays per frame); the configurations that are best
+    /// somewhere are drawn thicker. Hovering a line names it.
     fn plot(&self, ui: &mut egui::Ui) {
         let rays = log_space(RAYS_RANGE.0, RAYS_RANGE.1, CURVE_POINTS);
         Plot::new("tradeoff_plot")
             .height(260.0)
-            .legend(Legend::default().position(egui_plot::Corner::LeftTop))
             .x_axis_label("rays per frame")
             .y_axis_label("effective Mrays/s")
             .x_axis_formatter(|mark, _| rays_label(10f64.powf(mark.value)))
+            .label_formatter(|hover| match hover {
+                HoverPosition::NearDataPoint {
+                    plot_name,
+                    position,
+                    ..
+                } => Some(format!(
+                    "{plot_name}\n{} rays/frame: {:.2} Mrays/s",
+                    rays_label(10f64.powf(position.x)),
+                    position.y
+                )),
+                HoverPosition::Elsewhere { .. } => None,
+            })
             .include_y(0.0)
             .allow_scroll(false)
             .show(ui, |plot| {
-                for m in self.measurements.iter().filter(|m| m.is_usable()) {
+                for (i, m) in self.measurements.iter().enumerate() {
+                    if !m.is_usable() {
+                        continue;
+                    }
                     let points: PlotPoints = rays
                         .iter()
                         .map(|&r| [r.log10(), effective_mrays(m, r)])
                         .collect();
-                    plot.line(Line::new(m.label.clone(), points));
+                    let wins = self.best.iter().any(|b| b.label == m.label);
+                    plot.line(
+                        Line::new(m.label.clone(), points)
+                            .color(color(i))
+                            .width(if wins { 3.0 } else { 1.2 }),
+                    );
                 }
             });
+    }
+
+    /// A line-coloured square and a label.
+    fn swatch(ui: &mut egui::Ui, i: usize, text: String) {
+        ui.horizontal(|ui| {
+            let (rect, _) = ui.allocate_exact_size(egui::vec2(10.0, 10.0), egui::Sense::hover());
+            ui.painter().rect_filled(rect, 2.0, color(i));
+            ui.label(text);
+        });
     }
 
     /// Starts a requested study and measures the next configuration of a running one.
@@ -222,4 +257,11 @@ impl TradeoffPanel {
             Err(e) => self.error = Some(format!("cannot trace for the trade-off: {e}")),
         }
     }
+}
+
+/// The colour of measurement `i` in the plot and the tables: hues a golden angle apart, so colours
+/// stay put while measurements arrive.
+fn color(i: usize) -> egui::Color32 {
+    let hue = (i as f32 * 0.618_034).fract();
+    egui::ecolor::Hsva::new(hue, 0.75, 0.95, 1.0).into()
 }

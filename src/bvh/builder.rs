@@ -72,7 +72,7 @@ impl Builder {
     /// Whether the builder may reference a triangle from several leaves (spatial splits): its
     /// trees are checked with [`super::validate_with_references`] instead of [`super::validate`].
     pub fn duplicates_references(self) -> bool {
-        matches!(self, Builder::Sbvh)
+        matches!(self, Builder::Sbvh | Builder::TrbvhSplit(_))
     }
 
     /// The same builder with other treelet settings (no effect on builders without treelets;

@@ -277,6 +277,19 @@ fn has_obj_extension(path: impl AsRef<Path>) -> bool {
 pub fn load_scene(name_or_path: &str) -> Result<Scene> {
     let mut scene = if let Some(entry) = SCENES.iter().find(|e| e.name == name_or_path) {
         load_entry(entry)?
+    } else if let Some(cells) = name_or_path.strip_prefix("field:") {
+        // The procedural terrain at any size (2·cells² terrain triangles plus objects), for scaling
+        // studies: `field:710` is field-1m.
+        let cells: u32 = cells
+            .parse()
+            .ok()
+            .filter(|&c| (1..=20_000).contains(&c))
+            .ok_or_else(|| {
+                Error::InvalidArgument(format!(
+                    "'{name_or_path}': field:N takes N (cells per side) in 1..=20000"
+                ))
+            })?;
+        tessellated_field(cells)
     } else {
         let path = Path::new(name_or_path);
         if path.is_file() {

@@ -1,8 +1,9 @@
 //! PNG charts of a trade-off study, drawn with `plotters` into an RGB buffer and saved with
 //! `image`: (a) effective Mrays/s against rays per frame (log x), one line per configuration plus
-//! the best-of envelope, after Karras & Aila 2013, Figure 1; (b) SAH cost against build time
-//! (log x) with the Pareto front highlighted. Text is drawn by `TextBackend` in egui's bundled
-//! Ubuntu font (no system fonts needed).
+//! the best-of envelope and the crossovers, after Karras & Aila 2013, Figure 1; (b) SAH cost
+//! against build time (log x) with the Pareto front highlighted. Each has its legend in a panel
+//! at the right, clear of the data. Text is drawn by `TextBackend` in egui's bundled Ubuntu font
+//! (no system fonts needed).
 
 use std::path::Path;
 
@@ -15,7 +16,9 @@ use super::{best_ranges, effective_mrays, Measurement};
 use crate::{Error, Result};
 
 /// Width and height of every chart, in pixels.
-pub const CHART_SIZE: (u32, u32) = (1000, 600);
+pub const CHART_SIZE: (u32, u32) = (1200, 600);
+/// Width of the legend panel at the right of each chart, in pixels.
+const LEGEND_WIDTH: u32 = 270;
 
 /// plotters needs a family name; `TextBackend` draws every family in its one font.
 const FONT: &str = "sans-serif";
@@ -111,10 +114,23 @@ pub fn throughput_chart(
         .fold(0.0f64, f64::max)
         .max(1e-6)
         * 1.08;
-    save_chart(path, |root| {
-        let mut chart = ChartBuilder::on(root)
-            .caption(title, (FONT, 18))
-            .margin(16)
+    let envelope_style = ShapeStyle::from(BLACK.mix(0.2)).stroke_width(9);
+    let series_style = |color: RGBColor| ShapeStyle::from(color).stroke_width(2);
+    let mut legend = vec![LegendEntry {
+        label: "best (envelope)".into(),
+        swatch: Swatch::Line(envelope_style),
+    }];
+    legend.extend(usable.iter().map(|&(m, color)| LegendEntry {
+        label: legend_label(m),
+        swatch: if m.gpu {
+            Swatch::Line(series_style(color))
+        } else {
+            Swatch::Dashed(series_style(color))
+        },
+    }));
+    save_chart(path, title, &legend, |area| {
+        let mut chart = ChartBuilder::on(area)
+            .margin(12)
             .x_label_area_size(48)
             .y_label_area_size(64)
             .build_cartesian_2d((first..last).log_scale(), 0.0..y_max)
@@ -137,56 +153,34 @@ pub fn throughput_chart(
             (r, best)
         });
         chart
-            .draw_series(LineSeries::new(
-                envelope,
-                ShapeStyle::from(BLACK.mix(0.25)).stroke_width(9),
-            ))
-            .map_err(draw_error)?
-            .label("best (envelope)")
-            .legend(|(x, y)| {
-                PathElement::new(
-                    [(x, y), (x + 20, y)],
-                    ShapeStyle::from(BLACK.mix(0.25)).stroke_width(9),
-                )
-            });
+            .draw_series(LineSeries::new(envelope, envelope_style))
+            .map_err(draw_error)?;
         // The crossovers: where the best configuration changes.
         let best = best_ranges(measurements, first, last);
-        let crossovers = best.iter().skip(1).map(|r| r.from_rays);
-        for at in crossovers {
+        for at in best.iter().skip(1).map(|r| r.from_rays) {
             let style = ShapeStyle::from(BLACK.mix(0.5)).stroke_width(1);
             chart
                 .draw_series(DashedLineSeries::new([(at, 0.0), (at, y_max)], 4, 4, style))
                 .map_err(draw_error)?;
             chart
                 .draw_series(std::iter::once(
-                    EmptyElement::at((at, y_max))
-                        + Text::new(rays_label(at), (4, 4), (FONT, 12).into_font()),
+                    EmptyElement::at((at, 0.0))
+                        + Text::new(rays_label(at), (4, -18), (FONT, 13).into_font()),
                 ))
                 .map_err(draw_error)?;
         }
         for &(m, color) in &usable {
             // CPU references are dashed: their build time is CPU time, not part of a GPU frame.
-            let style = ShapeStyle::from(color).stroke_width(2);
             let points: Vec<(f64, f64)> =
                 rays.iter().map(|&r| (r, effective_mrays(m, r))).collect();
-            let series = if m.gpu {
-                chart.draw_series(LineSeries::new(points, style))
+            if m.gpu {
+                chart.draw_series(LineSeries::new(points, series_style(color)))
             } else {
-                chart.draw_series(DashedLineSeries::new(points, 10, 6, style))
-            };
-            series
-                .map_err(draw_error)?
-                .label(legend_label(m))
-                .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], style));
+                chart.draw_series(DashedLineSeries::new(points, 10, 6, series_style(color)))
+            }
+            .map_err(draw_error)?;
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .label_font((FONT, 13))
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK.mix(0.4))
-            .draw()
-            .map_err(draw_error)
+        Ok(())
     })
 }
 
@@ -199,34 +193,44 @@ pub fn pareto_chart(
     front: &[usize],
 ) -> Result<()> {
     let colors = series_colors(measurements);
-    // (build ms clamped for the log axis, SAH, measurement, colour, on the front)
-    let points: Vec<(f64, f64, &Measurement, RGBColor, bool)> = measurements
+    let points: Vec<ParetoPoint> = measurements
         .iter()
         .zip(colors)
         .enumerate()
         .filter(|(_, (m, _))| m.build_ms.is_finite() && m.sah.is_finite())
-        .map(|(i, (m, c))| (m.build_ms.max(1e-3), m.sah, m, c, front.contains(&i)))
+        .map(|(i, (m, color))| ParetoPoint {
+            at: (m.build_ms.max(1e-3), m.sah),
+            m,
+            color,
+            on_front: front.contains(&i),
+        })
         .collect();
     if points.is_empty() {
         return Err(Error::InvalidArgument("no measurements to chart".into()));
     }
-    let fold = |get: fn(&(f64, f64, &Measurement, RGBColor, bool)) -> f64, max: bool| {
-        let values = points.iter().map(get);
-        if max {
-            values.fold(f64::NEG_INFINITY, f64::max)
-        } else {
-            values.fold(f64::INFINITY, f64::min)
-        }
-    };
-    let (x_min, x_max) = (fold(|p| p.0, false), fold(|p| p.0, true));
-    let (y_min, y_max) = (fold(|p| p.1, false), fold(|p| p.1, true));
+    let xs = points.iter().map(|p| p.at.0);
+    let ys = points.iter().map(|p| p.at.1);
+    let (x_min, x_max) = (
+        xs.clone().fold(f64::INFINITY, f64::min),
+        xs.fold(0.0, f64::max),
+    );
+    let (y_min, y_max) = (
+        ys.clone().fold(f64::INFINITY, f64::min),
+        ys.fold(f64::NEG_INFINITY, f64::max),
+    );
     let y_pad = ((y_max - y_min) * 0.1).max(y_max.abs() * 0.02).max(1e-3);
-    let red = RGBColor(214, 39, 40);
-    let front_style = ShapeStyle::from(red).stroke_width(2);
-    save_chart(path, |root| {
-        let mut chart = ChartBuilder::on(root)
-            .caption(title, (FONT, 18))
-            .margin(16)
+    let front_style = ShapeStyle::from(RGBColor(214, 39, 40)).stroke_width(2);
+    let mut legend = vec![LegendEntry {
+        label: "Pareto front".into(),
+        swatch: Swatch::Line(front_style),
+    }];
+    legend.extend(points.iter().map(|p| LegendEntry {
+        label: legend_label(p.m),
+        swatch: Swatch::Dot(p.color),
+    }));
+    save_chart(path, title, &legend, |area| {
+        let mut chart = ChartBuilder::on(area)
+            .margin(12)
             .x_label_area_size(48)
             .y_label_area_size(64)
             .build_cartesian_2d(
@@ -250,34 +254,74 @@ pub fn pareto_chart(
             .map(|m| (m.build_ms.max(1e-3), m.sah));
         chart
             .draw_series(LineSeries::new(front_points, front_style))
-            .map_err(draw_error)?
-            .label("Pareto front")
-            .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], front_style));
-        let rings = points.iter().filter(|p| p.4);
-        chart
-            .draw_series(rings.map(|p| Circle::new((p.0, p.1), 9, front_style)))
             .map_err(draw_error)?;
-        for &(x, y, m, color, _) in &points {
-            chart
-                .draw_series(std::iter::once(Circle::new((x, y), 6, color.filled())))
-                .map_err(draw_error)?
-                .label(legend_label(m))
-                .legend(move |(x, y)| Circle::new((x + 10, y), 5, color.filled()));
-        }
-        let labels = points.iter().filter(|p| p.4).map(|p| {
-            EmptyElement::at((p.0, p.1))
-                + Text::new(legend_label(p.2), (10, 4), (FONT, 13).into_font())
+        let on_front = || points.iter().filter(|p| p.on_front);
+        chart
+            .draw_series(on_front().map(|p| Circle::new(p.at, 9, front_style)))
+            .map_err(draw_error)?;
+        chart
+            .draw_series(
+                points
+                    .iter()
+                    .map(|p| Circle::new(p.at, 6, p.color.filled())),
+            )
+            .map_err(draw_error)?;
+        // Labels alternate below and above the front so neighbours overlap less.
+        let labels = on_front().enumerate().map(|(k, p)| {
+            let dy = if k % 2 == 0 { 6 } else { -20 };
+            EmptyElement::at(p.at) + Text::new(legend_label(p.m), (11, dy), (FONT, 13).into_font())
         });
         chart.draw_series(labels).map_err(draw_error)?;
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .label_font((FONT, 13))
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK.mix(0.4))
-            .draw()
-            .map_err(draw_error)
+        Ok(())
     })
+}
+
+/// One measurement placed on the Pareto chart.
+struct ParetoPoint<'a> {
+    /// (build ms, clamped for the log axis; SAH)
+    at: (f64, f64),
+    m: &'a Measurement,
+    color: RGBColor,
+    on_front: bool,
+}
+
+/// One row of a chart's legend panel.
+struct LegendEntry {
+    label: String,
+    swatch: Swatch,
+}
+
+enum Swatch {
+    Line(ShapeStyle),
+    Dashed(ShapeStyle),
+    Dot(RGBColor),
+}
+
+/// Draws `entries` top-down in `area`.
+fn draw_legend<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    entries: &[LegendEntry],
+) -> Drawn {
+    const ROW: i32 = 21;
+    for (i, entry) in entries.iter().enumerate() {
+        let y = 40 + ROW * i as i32;
+        let (x0, x1) = (8, 36);
+        match entry.swatch {
+            Swatch::Line(style) => area.draw(&PathElement::new([(x0, y), (x1, y)], style)),
+            Swatch::Dashed(style) => area
+                .draw(&PathElement::new([(x0, y), (x0 + 10, y)], style))
+                .and_then(|()| area.draw(&PathElement::new([(x1 - 10, y), (x1, y)], style))),
+            Swatch::Dot(color) => area.draw(&Circle::new(((x0 + x1) / 2, y), 5, color.filled())),
+        }
+        .map_err(draw_error)?;
+        area.draw(&Text::new(
+            entry.label.as_str(),
+            (x1 + 8, y - 8),
+            (FONT, 14).into_font(),
+        ))
+        .map_err(draw_error)?;
+    }
+    Ok(())
 }
 
 /// "trbvh n=7 r=3", with " (CPU)" for CPU builders.
@@ -318,9 +362,12 @@ fn trim(v: f64) -> String {
     }
 }
 
-/// Renders `draw` on a white chart of `CHART_SIZE` and writes it as PNG to `path`.
+/// Renders a white chart of `CHART_SIZE` titled `title`, with `legend` in a panel at the right
+/// and `draw` drawing the plot in the rest, and writes it as PNG to `path`.
 fn save_chart(
     path: &Path,
+    title: &str,
+    legend: &[LegendEntry],
     draw: impl FnOnce(&DrawingArea<TextBackend<'_, BitMapBackend<'_>>, Shift>) -> Drawn,
 ) -> Result<()> {
     let (width, height) = CHART_SIZE;
@@ -331,7 +378,10 @@ fn save_chart(
             let bitmap = BitMapBackend::with_buffer(&mut pixels, (width, height));
             let root = TextBackend::new(bitmap, font).into_drawing_area();
             root.fill(&WHITE).map_err(draw_error)?;
-            draw(&root)?;
+            let body = root.titled(title, (FONT, 18)).map_err(draw_error)?;
+            let (plot, legend_area) = body.split_horizontally(width - LEGEND_WIDTH);
+            draw(&plot)?;
+            draw_legend(&legend_area, legend)?;
             root.present().map_err(draw_error)
         });
     drawn

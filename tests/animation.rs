@@ -1,0 +1,256 @@
+//! Animated scenes (`treelet::anim`): every animation kernel equals its CPU twin over a few
+//! frames; the tree of every frame (GPU LBVH and TRBVH rebuilds) is valid; refits keep valid
+//! boxes over frames (and their SAH cost is reported); the headless animation writes its PNGs; the
+//! BART kitchen through the animation path equals `BartScene::evaluate`. Small configurations keep
+//! the whole file fast on the software driver.
+
+mod common;
+
+use common::gpu;
+use treelet::anim::{
+    load_animation, Animation, Explosion, Flag, RigidBodies, TreeUpdater, UpdateMode,
+};
+use treelet::bvh::treelet::TreeletSettings;
+use treelet::bvh::{sah_cost, validate, Builder, SahParams};
+use treelet::gpu::read_buffer;
+use treelet::scene::{shared_scenes_dir, BartScene, Triangle};
+use treelet::trace::GpuScene;
+
+/// Small versions of the built-in animations.
+fn small_animations() -> Vec<Box<dyn Animation>> {
+    vec![
+        Box::new(Flag::new(24, 16)),
+        Box::new(RigidBodies::new(6, 1, 2)),
+        Box::new(Explosion::new(3)),
+    ]
+}
+
+/// Times to check: the start, a few frames in, and late frames (the explosion has burst by then).
+fn check_times(animation: &dyn Animation) -> Vec<f32> {
+    let range = animation.time_range();
+    [0, 3, range.frames / 2, range.frames - 1]
+        .iter()
+        .map(|&f| range.frame_time(f))
+        .collect()
+}
+
+/// The scene uploaded at its start time, as the viewer and the headless renderer do.
+fn upload(animation: &dyn Animation) -> GpuScene {
+    let first = animation.scene_at(animation.time_range().start);
+    GpuScene::upload_geometry(gpu(), &first, 1, 1).unwrap()
+}
+
+fn gpu_triangles(scene: &GpuScene) -> Vec<Triangle> {
+    read_buffer(gpu(), &scene.triangles, scene.triangle_count as usize).unwrap()
+}
+
+fn scene_diagonal(triangles: &[Triangle]) -> f32 {
+    triangles
+        .iter()
+        .fold(treelet::geometry::Aabb::EMPTY, |b, t| b.union(t.bounds()))
+        .extent()
+        .length()
+}
+
+#[test]
+fn animation_kernels_equal_their_cpu_twins() {
+    for mut animation in small_animations() {
+        let mut scene = upload(animation.as_ref());
+        let mut expected = Vec::new();
+        for t in check_times(animation.as_ref()) {
+            animation.animate(gpu(), t, &mut scene).unwrap();
+            animation.evaluate(t, &mut expected);
+            let got = gpu_triangles(&scene);
+            assert_eq!(got.len(), expected.len());
+            // GPU sin/cos/sqrt differ from the CPU's in the last bits.
+            let tolerance = 1e-5 * scene_diagonal(&expected) + 1e-6;
+            let mut worst = 0.0f32;
+            for (i, (g, e)) in got.iter().zip(&expected).enumerate() {
+                assert_eq!(
+                    g.material,
+                    e.material,
+                    "{} t={t}: triangle {i}",
+                    animation.name()
+                );
+                for (p, q) in g.vertices().iter().zip(e.vertices()) {
+                    worst = worst.max(p.distance(q));
+                }
+            }
+            assert!(
+                worst <= tolerance,
+                "{} t={t}: GPU and CPU twin differ by {worst} (tolerance {tolerance})",
+                animation.name()
+            );
+        }
+    }
+}
+
+#[test]
+fn every_frame_tree_is_valid_for_gpu_builders() {
+    let params = SahParams::default();
+    for builder in [Builder::Lbvh, Builder::Trbvh(TreeletSettings::BALANCED)] {
+        for mut animation in small_animations() {
+            let mut scene = upload(animation.as_ref());
+            let mut updater =
+                TreeUpdater::new(gpu(), UpdateMode::Rebuild(builder), &params).unwrap();
+            for t in check_times(animation.as_ref()) {
+                animation.animate(gpu(), t, &mut scene).unwrap();
+                updater.update(gpu(), &mut scene).unwrap();
+                let bvh = scene.download_bvh(gpu()).unwrap();
+                if let Err(e) = validate(&bvh, &gpu_triangles(&scene)) {
+                    panic!("{} {} t={t}: {e}", builder.name(), animation.name());
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn refits_keep_valid_boxes_and_lose_quality_when_the_mesh_bursts() {
+    let params = SahParams::default();
+    for mode in UpdateMode::REFITS.iter().copied() {
+        let mut animation = Explosion::new(4);
+        let mut refitted = upload(&animation);
+        let mut rebuilt = upload(&animation);
+        let mut refit = TreeUpdater::new(gpu(), mode, &params).unwrap();
+        let mut rebuild =
+            TreeUpdater::new(gpu(), UpdateMode::Rebuild(mode.builder()), &params).unwrap();
+        let mut costs = Vec::new();
+        for t in check_times(&animation) {
+            animation.animate(gpu(), t, &mut refitted).unwrap();
+            animation.animate(gpu(), t, &mut rebuilt).unwrap();
+            refit.update(gpu(), &mut refitted).unwrap();
+            rebuild.update(gpu(), &mut rebuilt).unwrap();
+            let triangles = gpu_triangles(&refitted);
+            let bvh = refitted.download_bvh(gpu()).unwrap();
+            if let Err(e) = validate(&bvh, &triangles) {
+                panic!("{} t={t}: {e}", mode.name());
+            }
+            let refit_sah = sah_cost(&bvh, &params);
+            let rebuild_sah = sah_cost(&rebuilt.download_bvh(gpu()).unwrap(), &params);
+            eprintln!(
+                "{} t={t:.2}: SAH refit {refit_sah:.2}, rebuild {rebuild_sah:.2}",
+                mode.name()
+            );
+            costs.push((refit_sah, rebuild_sah));
+        }
+        let (first_refit, first_rebuild) = costs[0];
+        assert!(
+            (first_refit - first_rebuild).abs() <= 1e-3 * first_rebuild,
+            "{}: the first frame's refit is its build",
+            mode.name()
+        );
+        let (last_refit, last_rebuild) = costs[costs.len() - 1];
+        assert!(
+            last_refit > 1.5 * last_rebuild,
+            "{}: after the burst the refitted tree should be far worse ({last_refit} vs {last_rebuild})",
+            mode.name()
+        );
+    }
+}
+
+#[test]
+fn headless_animation_writes_one_png_per_frame() {
+    let out = std::env::temp_dir().join(format!("treelet-anim-frames-{}", std::process::id()));
+    std::fs::remove_dir_all(&out).ok();
+    let xdg = std::env::temp_dir().join("treelet-test-xdg");
+    std::fs::create_dir_all(&xdg).unwrap();
+    let output = std::process::Command::new(env!("CARGO_BIN_EXE_treelet"))
+        .args([
+            "render", "--scene", "flag", "--frames", "3", "--width", "32",
+        ])
+        .args([
+            "--height",
+            "24",
+            "--spp",
+            "1",
+            "--builder",
+            "refit",
+            "--json",
+        ])
+        .arg("--out")
+        .arg(&out)
+        .env("XDG_RUNTIME_DIR", &xdg)
+        .output()
+        .expect("binary runs");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "render failed: {stderr}");
+    for frame in 0..3 {
+        let path = out.join(format!("frame_{frame:04}.png"));
+        let image = image::open(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        assert_eq!((image.width(), image.height()), (32, 24));
+    }
+    assert!(!out.join("frame_0003.png").exists());
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let records: Vec<serde_json::Value> = stdout
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{e}: {l}")))
+        .collect();
+    assert_eq!(records.len(), 3);
+    for (i, r) in records.iter().enumerate() {
+        assert_eq!(r["frame"], i);
+        assert_eq!(r["builder"], "refit");
+        for key in ["t", "build_ms", "sah", "rays", "trace_ms", "mrays_per_s"] {
+            assert!(r.get(key).is_some(), "{key} missing in {r}");
+        }
+        assert!(r["sah"].as_f64().unwrap() > 0.0);
+        assert!(r["rays"].as_u64().unwrap() >= 32 * 24);
+    }
+    std::fs::remove_dir_all(&out).ok();
+}
+
+#[test]
+fn bart_kitchen_through_the_animation_path_equals_evaluate() {
+    let Some(path) = shared_scenes_dir()
+        .map(|d| d.join("bart/kitchen/aff/kitchen.aff"))
+        .filter(|p| p.is_file())
+    else {
+        eprintln!("skipping: the shared BART kitchen is not there");
+        return;
+    };
+    let reference = BartScene::load(&path).unwrap();
+    let mut animation = load_animation("bart-kitchen").unwrap();
+    let t0 = animation.time_range().start;
+    // Upload a later frame, then animate back to frame 0 through the GPU scene.
+    let later = animation.scene_at(animation.time_range().frame_time(200));
+    let mut scene = GpuScene::upload_geometry(gpu(), &later, 1, 1).unwrap();
+    animation.animate(gpu(), t0, &mut scene).unwrap();
+    let mut expected = Vec::new();
+    reference.evaluate(t0, &mut expected);
+    let got = gpu_triangles(&scene);
+    assert_eq!(got.len(), expected.len());
+    assert!(got == expected, "frame 0 differs from BartScene::evaluate");
+    assert_ne!(
+        later.triangles, expected,
+        "frame 200 should differ from frame 0"
+    );
+    assert_eq!(animation.materials(), reference.materials());
+}
+
+#[test]
+fn animated_render_errors_are_clear() {
+    let xdg = std::env::temp_dir().join("treelet-test-xdg");
+    std::fs::create_dir_all(&xdg).unwrap();
+    for (args, expected) in [
+        (&["render", "--builder", "refit"][..], "--frames"),
+        (
+            &["render", "--scene", "no-such-animation", "--frames", "2"][..],
+            "unknown scene",
+        ),
+        (&["render", "--frames", "0"][..], "--frames"),
+        (&["render", "--json"][..], "--frames"),
+    ] {
+        let output = std::process::Command::new(env!("CARGO_BIN_EXE_treelet"))
+            .args(args)
+            .env("XDG_RUNTIME_DIR", &xdg)
+            .output()
+            .expect("binary runs");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(!output.status.success(), "{args:?} succeeded");
+        assert!(!stderr.contains("panicked"), "{args:?} panicked: {stderr}");
+        assert!(
+            stderr.contains(expected),
+            "{args:?}: expected '{expected}' in {stderr}"
+        );
+    }
+}
