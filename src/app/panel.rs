@@ -22,6 +22,9 @@ pub const PANEL_WIDTH: f32 = 330.0;
 pub const SAH_INTERVAL_S: f64 = 2.0;
 
 const ERROR_RED: Color32 = Color32::from_rgb(255, 90, 90);
+/// Colours of the rebuild and the refit curve of the SAH plot.
+const REBUILD_COLOUR: Color32 = Color32::from_rgb(240, 140, 80);
+const REFIT_COLOUR: Color32 = Color32::from_rgb(100, 160, 240);
 
 /// Read-only facts the panel shows.
 pub struct PanelInfo<'a> {
@@ -331,7 +334,6 @@ fn animation(
         .fold(1.0, f64::max);
     egui_plot::Plot::new("sah_over_time")
         .height(130.0)
-        .legend(egui_plot::Legend::default().position(egui_plot::Corner::LeftTop))
         .allow_zoom(false)
         .allow_drag(false)
         .allow_scroll(false)
@@ -342,21 +344,31 @@ fn animation(
         .x_axis_label("t")
         .y_axis_label("SAH")
         .show(ui, |plot| {
-            plot.line(egui_plot::Line::new(
-                rebuild_label.as_str(),
-                egui_plot::PlotPoints::from(rebuild),
-            ));
-            plot.line(egui_plot::Line::new(
-                refit_label.as_str(),
-                egui_plot::PlotPoints::from(refit),
-            ));
+            plot.line(
+                egui_plot::Line::new(rebuild_label.as_str(), egui_plot::PlotPoints::from(rebuild))
+                    .color(REBUILD_COLOUR),
+            );
+            plot.line(
+                egui_plot::Line::new(refit_label.as_str(), egui_plot::PlotPoints::from(refit))
+                    .color(REFIT_COLOUR),
+            );
         });
-    if let Some(last) = info.history.last() {
-        ui.label(format!(
-            "SAH at t = {:.2}: rebuild {:.1}, refit {:.1}",
-            last.t, last.rebuild, last.refit
-        ));
-    }
+    // The legend, below the plot (inside it would hide the curves).
+    let last = info.history.last();
+    ui.colored_label(
+        REBUILD_COLOUR,
+        format!(
+            "— {rebuild_label}{}",
+            last.map_or(String::new(), |s| format!(": {:.1}", s.rebuild))
+        ),
+    );
+    ui.colored_label(
+        REFIT_COLOUR,
+        format!(
+            "— {refit_label}{}",
+            last.map_or(String::new(), |s| format!(": {:.1}", s.refit))
+        ),
+    );
 }
 
 fn build_times(ui: &mut egui::Ui, stats: &FrameStats, per_frame: bool) {
