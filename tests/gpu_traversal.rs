@@ -4,23 +4,10 @@
 
 mod common;
 
-use common::{assert_hits_match, gpu, random_soup, test_rays};
+use common::{assert_hits_match, gpu, random_soup, scene_of, test_rays};
 use treelet::bvh::{build_sweep_sah, validate, SahParams};
-use treelet::scene::{load_scene, Material, Scene, Triangle};
+use treelet::scene::{load_scene, Scene};
 use treelet::trace::{closest_hits, GpuScene};
-
-fn scene_of(triangles: Vec<Triangle>) -> Scene {
-    let bounds = triangles
-        .iter()
-        .fold(treelet::geometry::Aabb::EMPTY, |b, t| b.union(t.bounds()));
-    Scene {
-        name: "test".into(),
-        triangles,
-        materials: vec![Material::diffuse(glam::Vec3::splat(0.5))],
-        camera: treelet::scene::Camera::framing(&bounds),
-        sky: glam::Vec3::ONE,
-    }
-}
 
 fn check_scene(scene: &Scene, per_kind: usize, seed: u64) {
     let bvh = build_sweep_sah(&scene.triangles, &SahParams::default());

@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{assert_hits_match, gpu, random_soup, rng, test_rays};
+use common::{assert_hits_match, gpu, random_soup, rng, scene_of, test_rays};
 use glam::Vec3;
 use rand::Rng;
 use treelet::bvh::lbvh::{
@@ -12,21 +12,8 @@ use treelet::bvh::lbvh::{
     prim_boxes_cpu, LbvhBuilder,
 };
 use treelet::bvh::validate;
-use treelet::scene::{load_scene, Camera, Material, Scene, Triangle};
+use treelet::scene::{load_scene, Triangle};
 use treelet::trace::{closest_hits, GpuScene};
-
-fn scene_of(triangles: Vec<Triangle>) -> Scene {
-    let bounds = triangles
-        .iter()
-        .fold(treelet::geometry::Aabb::EMPTY, |b, t| b.union(t.bounds()));
-    Scene {
-        name: "test".into(),
-        triangles,
-        materials: vec![Material::diffuse(Vec3::splat(0.5))],
-        camera: Camera::framing(&bounds),
-        sky: Vec3::ONE,
-    }
-}
 
 /// Builds on the GPU with read-back of every stage and compares each with its CPU twin.
 fn check_stages_equal_cpu(triangles: Vec<Triangle>) {

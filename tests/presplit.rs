@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::{assert_hits_match, gpu, random_soup, test_rays};
+use common::{assert_hits_match, gpu, random_soup, scene_of, test_rays};
 use glam::Vec3;
 use treelet::bvh::presplit::{presplit_cpu, split_budget, PreSplitter};
 use treelet::bvh::treelet::{
@@ -14,21 +14,8 @@ use treelet::bvh::treelet::{
 };
 use treelet::bvh::{sah_cost, validate, validate_with_references, SahParams};
 use treelet::geometry::Aabb;
-use treelet::scene::{load_scene, Camera, Material, Scene, Triangle};
+use treelet::scene::{load_scene, Triangle};
 use treelet::trace::{closest_hits, GpuScene};
-
-fn scene_of(triangles: Vec<Triangle>) -> Scene {
-    let bounds = triangles
-        .iter()
-        .fold(Aabb::EMPTY, |b, t| b.union(t.bounds()));
-    Scene {
-        name: "test".into(),
-        triangles,
-        materials: vec![Material::diffuse(Vec3::splat(0.5))],
-        camera: Camera::framing(&bounds),
-        sky: Vec3::ONE,
-    }
-}
 
 /// A scene that needs splitting: long diagonal slivers crossing a field of small triangles.
 fn slivers() -> Vec<Triangle> {

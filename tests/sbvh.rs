@@ -5,26 +5,13 @@
 
 mod common;
 
-use common::{assert_hits_match, gpu, random_soup, test_rays};
+use common::{assert_hits_match, gpu, random_soup, scene_named, test_rays};
 use glam::Vec3;
 use treelet::bvh::{
     build_sbvh, build_sweep_sah, sah_cost, validate_with_references, Bvh, SahParams,
 };
-use treelet::scene::{load_scene, Camera, Material, Scene, Triangle};
+use treelet::scene::{load_scene, Scene, Triangle};
 use treelet::trace::{closest_hits, GpuScene};
-
-fn scene_of(name: &str, triangles: Vec<Triangle>) -> Scene {
-    let bounds = triangles
-        .iter()
-        .fold(treelet::geometry::Aabb::EMPTY, |b, t| b.union(t.bounds()));
-    Scene {
-        name: name.into(),
-        triangles,
-        materials: vec![Material::diffuse(Vec3::splat(0.5))],
-        camera: Camera::framing(&bounds),
-        sky: Vec3::ONE,
-    }
-}
 
 /// A fan of `n` long thin slivers on diagonals around the z axis.
 fn fan(n: usize) -> Vec<Triangle> {
@@ -111,7 +98,7 @@ fn cornell_is_valid_traced_exactly_and_not_worse_than_sweep() {
 
 #[test]
 fn huge_thin_triangles_are_split_and_not_worse_than_sweep() {
-    let scene = scene_of("huge-thin", huge_thin());
+    let scene = scene_named("huge-thin", huge_thin());
     let bvh = check_scene(&scene, 400, 6);
     assert!(bvh.prim_indices.len() > scene.triangles.len());
     let (a, b) = assert_sah_not_worse(&scene, &bvh);
@@ -120,7 +107,7 @@ fn huge_thin_triangles_are_split_and_not_worse_than_sweep() {
 
 #[test]
 fn fan_of_slivers_gets_spatial_splits() {
-    let scene = scene_of("fan", fan(2000));
+    let scene = scene_named("fan", fan(2000));
     let bvh = check_scene(&scene, 400, 7);
     assert!(
         bvh.prim_indices.len() > scene.triangles.len(),
@@ -139,7 +126,7 @@ fn field_is_valid_and_traced_exactly() {
 
 #[test]
 fn random_soup_is_valid_and_traced_exactly() {
-    check_scene(&scene_of("soup", random_soup(3000, 7)), 500, 1);
+    check_scene(&scene_named("soup", random_soup(3000, 7)), 500, 1);
 }
 
 #[test]

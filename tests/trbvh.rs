@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{assert_hits_match, gpu, random_soup, rng, test_rays};
+use common::{assert_hits_match, gpu, random_soup, rng, scene_of, test_rays};
 use glam::Vec3;
 use rand::Rng;
 use treelet::bvh::lbvh::build_lbvh_cpu;
@@ -14,21 +14,8 @@ use treelet::bvh::treelet::{
     TreeletLeaf, TreeletSettings,
 };
 use treelet::bvh::{sah_cost, validate, SahParams};
-use treelet::scene::{load_scene, Camera, Material, Scene, Triangle};
+use treelet::scene::{load_scene, Triangle};
 use treelet::trace::{closest_hits, GpuScene};
-
-fn scene_of(triangles: Vec<Triangle>) -> Scene {
-    let bounds = triangles
-        .iter()
-        .fold(treelet::geometry::Aabb::EMPTY, |b, t| b.union(t.bounds()));
-    Scene {
-        name: "test".into(),
-        triangles,
-        materials: vec![Material::diffuse(Vec3::splat(0.5))],
-        camera: Camera::framing(&bounds),
-        sky: Vec3::ONE,
-    }
-}
 
 /// Every full binary tree over the leaf set `s` (bitmask), as its cost under `model`; each
 /// unordered partition once, so 7 leaves give 10,395 topologies.

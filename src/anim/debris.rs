@@ -9,9 +9,9 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
 use super::kernel::AnimationKernel;
-use super::meshes::{box_between, grid, icosphere};
 use super::{check_triangle_count, AnimateStage, Animation, TimeRange};
 use crate::gpu::{storage_buffer, GpuContext, StageTime};
+use crate::scene::meshes::{box_between, grid, icosphere};
 use crate::scene::{Camera, Material, Triangle};
 use crate::trace::GpuScene;
 use crate::Result;

@@ -17,7 +17,7 @@
 //!
 //! `registry` names them all; `refit` is the refit-only tree update (the tree a GPU builder built
 //! at the first frame, LBVH by default, its boxes refitted on the GPU every frame) and
-//! `update_mode` chooses between it and the per-frame rebuild. `kernel` runs the animation kernels, `meshes` makes the procedural
+//! `update_mode` chooses between it and the per-frame rebuild. `kernel` runs the animation kernels, `scene::meshes` makes the procedural
 //! geometry, `time_range` is the time axis.
 
 mod bart;
@@ -25,7 +25,6 @@ mod bodies;
 mod cloth;
 mod debris;
 mod kernel;
-mod meshes;
 mod obj_sequence;
 mod refit;
 mod registry;

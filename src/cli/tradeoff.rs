@@ -16,9 +16,9 @@ use treelet::gpu::GpuContext;
 use treelet::scene::load_scene;
 use treelet::trace::{PathTracer, RenderSettings};
 use treelet::tradeoff::{
-    best_ranges, configurations, effective_mrays, log_space, measure, pareto_chart, pareto_front,
-    throughput_chart, BestRange, MeasureSettings, Measurement, CHART_SIZE, CURVE_POINTS,
-    RAYS_RANGE,
+    best_ranges, configurations, effective_mrays, log_space, measure, median_of_passes,
+    pareto_chart, pareto_front, throughput_chart, BestRange, MeasureSettings, Measurement,
+    CHART_SIZE, CURVE_POINTS, RAYS_RANGE,
 };
 use treelet::{Error, Result};
 
@@ -47,7 +47,8 @@ pub struct TradeoffArgs {
     /// Maximum primitives per leaf
     #[arg(long, default_value_t = SahParams::default().max_leaf_size)]
     max_leaf_size: u32,
-    /// Timed builds per GPU configuration and timed traces per configuration (medians are kept)
+    /// Round-robin passes over all configurations, each one timed build and one timed trace per
+    /// configuration (the medians are kept)
     #[arg(long, default_value_t = 3)]
     repeats: u32,
     /// One trbvh setting (n=5, 1 round) instead of the treelet-size × rounds sweep
@@ -125,29 +126,41 @@ pub fn run(gpu: &GpuContext, args: &TradeoffArgs) -> Result<()> {
             max_leaf_size: args.max_leaf_size,
             ..SahParams::default()
         },
-        repeats: args.repeats,
+        repeats: 1,
         spp: args.spp,
     };
     let configs = configurations(args.quick);
-    let progress = ProgressBar::new(configs.len() as u64).with_style(
+    let progress = ProgressBar::new(configs.len() as u64 * u64::from(args.repeats)).with_style(
         ProgressStyle::with_template("{spinner} [{bar:30}] {pos}/{len} {msg} ({elapsed})")
             .map_err(|e| Error::InvalidArgument(format!("progress bar template: {e}")))?
             .progress_chars("=> "),
     );
-    let mut measurements = Vec::with_capacity(configs.len());
-    for builder in configs {
-        progress.set_message(builder.label());
-        measurements.push(measure(
-            gpu,
-            &scene,
-            &scene.camera,
-            builder,
-            &mut tracer,
-            &settings,
-        )?);
-        progress.inc(1);
+    // Round-robin passes: load from other processes that comes and goes hits every
+    // configuration alike, and the medians drop the outliers.
+    let mut passes: Vec<Vec<Measurement>> = vec![Vec::new(); configs.len()];
+    for pass in 1..=args.repeats {
+        for (builder, runs) in configs.iter().zip(&mut passes) {
+            progress.set_message(format!(
+                "{} (pass {pass}/{})",
+                builder.label(),
+                args.repeats
+            ));
+            runs.push(measure(
+                gpu,
+                &scene,
+                &scene.camera,
+                *builder,
+                &mut tracer,
+                &settings,
+            )?);
+            progress.inc(1);
+        }
     }
     progress.finish_and_clear();
+    let measurements: Vec<Measurement> = passes
+        .iter()
+        .filter_map(|runs| median_of_passes(runs))
+        .collect();
 
     let (min_rays, max_rays) = RAYS_RANGE;
     let rays = log_space(min_rays, max_rays, CURVE_POINTS);
@@ -238,13 +251,13 @@ fn csv(measurements: &[Measurement], best: &[BestRange]) -> String {
 
 fn print_summary(measurements: &[Measurement], best: &[BestRange]) {
     println!(
-        "{:<20} {:>12} {:>10} {:>10}",
+        "{:<28} {:>12} {:>10} {:>10}",
         "configuration", "build ms", "SAH", "Mrays/s"
     );
     for m in measurements {
         let invalid = if m.valid { "" } else { "  (INVALID TREE)" };
         println!(
-            "{:<20} {:>12.3} {:>10.3} {:>10.3}{invalid}",
+            "{:<28} {:>12.3} {:>10.3} {:>10.3}{invalid}",
             m.label, m.build_ms, m.sah, m.mrays_per_s
         );
     }

@@ -4,6 +4,7 @@
 
 mod bart;
 mod camera;
+pub(crate) mod meshes;
 mod obj;
 mod procedural;
 mod registry;

@@ -2,6 +2,7 @@
 //! terrain with objects on it whose triangle count scales with a parameter (`tessellated_field`).
 //! Both are deterministic.
 
+use super::meshes::icosphere;
 use super::{Camera, Material, Scene, Triangle};
 use glam::{Mat3, Vec3};
 
@@ -155,60 +156,6 @@ fn terrain_height(x: f32, z: f32) -> f32 {
         + 0.25 * (0.83 * x + 0.5).sin() * (0.91 * z + 0.2).sin()
 }
 
-/// The 80 triangles of a once-subdivided icosahedron on the unit sphere, facing outwards.
-fn icosphere() -> Vec<[Vec3; 3]> {
-    let t = (1.0 + 5f32.sqrt()) / 2.0;
-    let v = [
-        Vec3::new(-1.0, t, 0.0),
-        Vec3::new(1.0, t, 0.0),
-        Vec3::new(-1.0, -t, 0.0),
-        Vec3::new(1.0, -t, 0.0),
-        Vec3::new(0.0, -1.0, t),
-        Vec3::new(0.0, 1.0, t),
-        Vec3::new(0.0, -1.0, -t),
-        Vec3::new(0.0, 1.0, -t),
-        Vec3::new(t, 0.0, -1.0),
-        Vec3::new(t, 0.0, 1.0),
-        Vec3::new(-t, 0.0, -1.0),
-        Vec3::new(-t, 0.0, 1.0),
-    ]
-    .map(Vec3::normalize);
-    const FACES: [[usize; 3]; 20] = [
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    FACES
-        .iter()
-        .flat_map(|&[i, j, k]| {
-            let (a, b, c) = (v[i], v[j], v[k]);
-            let (ab, bc, ca) = (
-                (a + b).normalize(),
-                (b + c).normalize(),
-                (c + a).normalize(),
-            );
-            [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]
-        })
-        .collect()
-}
-
 /// Number of objects along each side of `tessellated_field(cells_per_side)`.
 fn objects_per_side(cells_per_side: u32) -> u32 {
     cells_per_side.div_ceil(CELLS_PER_OBJECT)
@@ -267,7 +214,7 @@ pub fn tessellated_field(cells_per_side: u32) -> Scene {
     }
 
     // Objects: one per cell of a coarser grid, centred in it.
-    let sphere = icosphere();
+    let sphere = icosphere(1);
     let k = objects_per_side(n);
     let spacing = size / k as f32;
     let radius = 0.25 * spacing.min(8.0);
@@ -347,7 +294,7 @@ mod tests {
 
     #[test]
     fn icosphere_is_closed_and_outward() {
-        let s = icosphere();
+        let s = icosphere(1);
         assert_eq!(s.len(), 80);
         for [a, b, c] in &s {
             assert!((b - a).cross(c - a).dot(*a + *b + *c) > 0.0);

@@ -1,8 +1,10 @@
 //! Measuring one builder configuration for the trade-off study, the way `treelet bench` does:
 //! build (GPU builders: one warm-up build, then the median of `repeats` timed builds, GPU
 //! timestamps; CPU builders: CPU time of one build), validate, SAH, then trace diffuse paths with
-//! the caller's tracer: a warm-up trace, then the median throughput of `repeats` timed traces. Every configuration traces the same camera, image
-//! size and sample count from the same seeds.
+//! the caller's tracer: a warm-up trace, then the median throughput of `repeats` timed traces.
+//! Every configuration traces the same camera, image size and sample count from the same seeds.
+//! Studies on a shared machine measure all configurations in several round-robin passes and keep
+//! the medians (`median_of_passes`), so load that comes and goes affects all of them alike.
 
 use super::Measurement;
 use crate::bvh::{sah_cost, validate, validate_with_references, Builder, SahParams};
@@ -79,4 +81,52 @@ pub fn measure(
         mrays_per_s,
         valid,
     })
+}
+
+/// One measurement from several passes over the same configuration: the median build time and
+/// the median throughput; label and SAH from the first pass (trees are deterministic); valid only
+/// if every pass was. `None` for no passes.
+pub fn median_of_passes(passes: &[Measurement]) -> Option<Measurement> {
+    let first = passes.first()?;
+    let median = |get: fn(&Measurement) -> f64| {
+        let mut values: Vec<f64> = passes.iter().map(get).collect();
+        values.sort_by(f64::total_cmp);
+        values[values.len() / 2]
+    };
+    Some(Measurement {
+        build_ms: median(|m| m.build_ms),
+        mrays_per_s: median(|m| m.mrays_per_s),
+        valid: passes.iter().all(|m| m.valid),
+        ..first.clone()
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn passes_combine_into_medians() {
+        let pass = |build_ms, mrays_per_s, valid| Measurement {
+            label: "lbvh".into(),
+            builder: "lbvh".into(),
+            treelet_size: None,
+            rounds: None,
+            gpu: true,
+            build_ms,
+            sah: 50.0,
+            mrays_per_s,
+            valid,
+        };
+        let combined = median_of_passes(&[
+            pass(9.0, 1.0, true),
+            pass(1.0, 3.0, true),
+            pass(5.0, 2.0, false),
+        ])
+        .unwrap();
+        assert_eq!((combined.build_ms, combined.mrays_per_s), (5.0, 2.0));
+        assert!(!combined.valid);
+        assert_eq!(combined.sah, 50.0);
+        assert!(median_of_passes(&[]).is_none());
+    }
 }

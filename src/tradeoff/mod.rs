@@ -15,7 +15,7 @@ mod text_backend;
 
 pub use chart::{pareto_chart, rays_label, throughput_chart, CHART_SIZE};
 pub use configs::{configurations, ROUNDS, SPLIT_PERCENTS, TREELET_SIZES};
-pub use measure::{measure, MeasureSettings};
+pub use measure::{measure, median_of_passes, MeasureSettings};
 pub use model::{
     best_ranges, effective_mrays, log_space, BestRange, Measurement, CURVE_POINTS, RAYS_RANGE,
 };

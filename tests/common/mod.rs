@@ -202,3 +202,22 @@ pub fn random_soup(n: usize, seed: u64) -> Vec<Triangle> {
         })
         .collect()
 }
+
+/// A scene of `triangles` with one grey material, framed by the default camera.
+pub fn scene_of(triangles: Vec<Triangle>) -> treelet::scene::Scene {
+    scene_named("test", triangles)
+}
+
+/// `scene_of` with a name (shown in assertion messages).
+pub fn scene_named(name: &str, triangles: Vec<Triangle>) -> treelet::scene::Scene {
+    let bounds = triangles
+        .iter()
+        .fold(treelet::geometry::Aabb::EMPTY, |b, t| b.union(t.bounds()));
+    treelet::scene::Scene {
+        name: name.into(),
+        triangles,
+        materials: vec![treelet::scene::Material::diffuse(Vec3::splat(0.5))],
+        camera: treelet::scene::Camera::framing(&bounds),
+        sky: Vec3::ONE,
+    }
+}

@@ -1,4 +1,4 @@
-//! Procedural geometry for the built-in animations, as triangle soups of vertex triples:
+//! Procedural geometry for the built-in scenes and animations, as triangle soups of vertex triples:
 //! subdivided icospheres, subdivided cubes and tessellated rectangles. All deterministic, all
 //! counter-clockwise seen from the outside (the side the normal points to).
 
