@@ -228,6 +228,17 @@ fn tradeoff_writes_csv_json_and_charts() {
     let ranges = json["best_ranges"].as_array().unwrap();
     assert_eq!(ranges[0]["from_rays"].as_f64().unwrap(), 1e6);
     assert_eq!(ranges.last().unwrap()["to_rays"].as_f64().unwrap(), 1e12);
+    // Among GPU builders only, every winner is a GPU configuration.
+    let gpu_labels: Vec<&str> = measurements
+        .iter()
+        .filter(|m| m["gpu"] == true)
+        .map(|m| m["label"].as_str().unwrap())
+        .collect();
+    let gpu_ranges = json["best_ranges_gpu_only"].as_array().unwrap();
+    assert!(!gpu_ranges.is_empty());
+    for r in gpu_ranges {
+        assert!(gpu_labels.contains(&r["label"].as_str().unwrap()), "{r}");
+    }
     assert!(!json["pareto_front"].as_array().unwrap().is_empty());
 
     let size = (

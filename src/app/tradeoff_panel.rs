@@ -83,7 +83,7 @@ impl TradeoffPanel {
                 self.start_requested = true;
             }
             ui.add_enabled(idle, egui::Checkbox::new(&mut self.quick, "quick"))
-                .on_hover_text("one trbvh setting (n=5, 1 round) instead of n × rounds");
+                .on_hover_text("one trbvh setting (n=5, 1 round) and one split budget");
         });
         if let Some(study) = &self.study {
             ui.horizontal(|ui| {

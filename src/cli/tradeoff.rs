@@ -51,7 +51,7 @@ pub struct TradeoffArgs {
     /// configuration (the medians are kept)
     #[arg(long, default_value_t = 3)]
     repeats: u32,
-    /// One trbvh setting (n=5, 1 round) instead of the treelet-size × rounds sweep
+    /// One trbvh setting (n=5, 1 round) and one trbvh-split budget instead of the sweeps
     #[arg(long)]
     quick: bool,
 }
@@ -72,6 +72,8 @@ struct Report<'a> {
     pareto_front: Vec<&'a str>,
     curves: Curves<'a>,
     best_ranges: &'a [BestRange],
+    /// The same among GPU builders only (the per-frame path).
+    best_ranges_gpu_only: &'a [BestRange],
     charts: Charts,
 }
 
@@ -165,6 +167,10 @@ pub fn run(gpu: &GpuContext, args: &TradeoffArgs) -> Result<()> {
     let (min_rays, max_rays) = RAYS_RANGE;
     let rays = log_space(min_rays, max_rays, CURVE_POINTS);
     let best = best_ranges(&measurements, min_rays, max_rays);
+    // The per-frame path alone: GPU builders only.
+    let gpu_measurements: Vec<Measurement> =
+        measurements.iter().filter(|m| m.gpu).cloned().collect();
+    let best_gpu = best_ranges(&gpu_measurements, min_rays, max_rays);
     let front = pareto_front(&measurements);
     let stem = format!("tradeoff-{}", file_tag(&scene.name));
     let out = |suffix: &str| args.out.join(format!("{stem}{suffix}"));
@@ -204,6 +210,7 @@ pub fn run(gpu: &GpuContext, args: &TradeoffArgs) -> Result<()> {
                 .collect(),
         },
         best_ranges: &best,
+        best_ranges_gpu_only: &best_gpu,
         charts: Charts {
             throughput: file_name(&throughput_png),
             pareto: file_name(&pareto_png),
@@ -214,7 +221,7 @@ pub fn run(gpu: &GpuContext, args: &TradeoffArgs) -> Result<()> {
     let json = serde_json::to_string_pretty(&report)
         .map_err(|e| Error::InvalidArgument(format!("cannot encode the report: {e}")))?;
     write_file(&out(".json"), &json)?;
-    print_summary(&measurements, &best);
+    print_summary(&measurements, &best, &best_gpu);
     log::info!(
         "wrote {stem}.csv, {stem}.json, {stem}-throughput.png and {stem}-pareto.png to {}",
         args.out.display()
@@ -249,7 +256,7 @@ fn csv(measurements: &[Measurement], best: &[BestRange]) -> String {
     text
 }
 
-fn print_summary(measurements: &[Measurement], best: &[BestRange]) {
+fn print_summary(measurements: &[Measurement], best: &[BestRange], best_gpu: &[BestRange]) {
     println!(
         "{:<28} {:>12} {:>10} {:>10}",
         "configuration", "build ms", "SAH", "Mrays/s"
@@ -261,12 +268,17 @@ fn print_summary(measurements: &[Measurement], best: &[BestRange]) {
             m.label, m.build_ms, m.sah, m.mrays_per_s
         );
     }
-    println!("best configuration by rays per frame:");
-    for r in best {
-        println!(
-            "  {:>10.3e} .. {:>10.3e} rays: {}",
-            r.from_rays, r.to_rays, r.label
-        );
+    for (title, ranges) in [
+        ("best configuration by rays per frame:", best),
+        ("best GPU configuration by rays per frame:", best_gpu),
+    ] {
+        println!("{title}");
+        for r in ranges {
+            println!(
+                "  {:>10.3e} .. {:>10.3e} rays: {}",
+                r.from_rays, r.to_rays, r.label
+            );
+        }
     }
 }
 

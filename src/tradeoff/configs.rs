@@ -15,7 +15,7 @@ pub const ROUNDS: [u32; 3] = [1, 2, 3];
 pub const SPLIT_PERCENTS: [u32; 3] = [10, 30, 50];
 
 /// The configurations to measure. `quick` keeps one `trbvh` setting (`TreeletSettings::FAST`)
-/// instead of the whole sweep, for tests and previews.
+/// and `trbvh-split` with its listed budget instead of the sweeps, for tests and previews.
 pub fn configurations(quick: bool) -> Vec<Builder> {
     let all = Builder::ALL
         .iter()
