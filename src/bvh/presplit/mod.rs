@@ -53,6 +53,22 @@ pub fn split_budget(triangles: u32, percent: u32) -> u32 {
     (u64::from(triangles) * u64::from(percent) / 100) as u32
 }
 
+/// The grid and parameters of a per-triangle pre-splitting kernel over `n` triangles.
+fn per_triangle_params(ctx: &GpuContext, n: u32) -> ((u32, u32), wgpu::Buffer) {
+    let (gx, gy) = dispatch_grid(ctx, n, WORKGROUP);
+    let params = uniform_buffer(
+        ctx,
+        "split params",
+        &SplitParams {
+            count: n,
+            row_pitch: gx * WORKGROUP,
+            zero: 0,
+            _pad: 0,
+        },
+    );
+    ((gx, gy), params)
+}
+
 struct Scratch {
     capacity: u32,
     tri_boxes: wgpu::Buffer,
@@ -123,17 +139,7 @@ impl PreSplitter {
             n,
         )?;
         let s = self.scratch.as_ref().expect("allocated");
-        let (gx, gy) = dispatch_grid(ctx, n, WORKGROUP);
-        let split_params = uniform_buffer(
-            ctx,
-            "split params",
-            &SplitParams {
-                count: n,
-                row_pitch: gx * WORKGROUP,
-                zero: 0,
-                _pad: 0,
-            },
-        );
+        let ((gx, gy), split_params) = per_triangle_params(ctx, n);
         let budget_params = uniform_buffer(
             ctx,
             "budget params",
@@ -244,17 +250,7 @@ impl PreSplitter {
         }
         let n = scene.triangle_count;
         let s = self.scratch.as_ref().expect("record_counts first");
-        let (gx, gy) = dispatch_grid(ctx, n, WORKGROUP);
-        let params = uniform_buffer(
-            ctx,
-            "split params",
-            &SplitParams {
-                count: n,
-                row_pitch: gx * WORKGROUP,
-                zero: 0,
-                _pad: 0,
-            },
-        );
+        let ((gx, gy), params) = per_triangle_params(ctx, n);
         let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("triangles_split"),
             layout: &self.split.get_bind_group_layout(0),
