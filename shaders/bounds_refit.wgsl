@@ -29,33 +29,7 @@ struct RefitParams {
 var<workgroup> climbing: atomic<u32>;
 var<workgroup> any_climbing: u32;
 
-fn store_box(node: u32, lo: vec3<f32>, hi: vec3<f32>) {
-    let w = node * 8u;
-    atomicStore(&node_words[w + 0u], bitcast<u32>(lo.x));
-    atomicStore(&node_words[w + 1u], bitcast<u32>(lo.y));
-    atomicStore(&node_words[w + 2u], bitcast<u32>(lo.z));
-    atomicStore(&node_words[w + 4u], bitcast<u32>(hi.x));
-    atomicStore(&node_words[w + 5u], bitcast<u32>(hi.y));
-    atomicStore(&node_words[w + 6u], bitcast<u32>(hi.z));
-}
-
-fn load_min(node: u32) -> vec3<f32> {
-    let w = node * 8u;
-    return vec3<f32>(
-        bitcast<f32>(atomicLoad(&node_words[w + 0u])),
-        bitcast<f32>(atomicLoad(&node_words[w + 1u])),
-        bitcast<f32>(atomicLoad(&node_words[w + 2u])),
-    );
-}
-
-fn load_max(node: u32) -> vec3<f32> {
-    let w = node * 8u;
-    return vec3<f32>(
-        bitcast<f32>(atomicLoad(&node_words[w + 4u])),
-        bitcast<f32>(atomicLoad(&node_words[w + 5u])),
-        bitcast<f32>(atomicLoad(&node_words[w + 6u])),
-    );
-}
+#include "node_words.wgsl"
 
 @compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {

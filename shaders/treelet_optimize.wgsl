@@ -44,6 +44,8 @@ struct TreeletParams {
 @group(0) @binding(4) var<storage, read_write> costs: array<atomic<u32>>;
 @group(0) @binding(5) var<storage, read_write> arrivals: array<atomic<u32>>;
 
+#include "node_words.wgsl"
+
 var<workgroup> climbing: atomic<u32>;
 var<workgroup> any_climbing: u32;
 var<workgroup> queue: array<u32, WORKGROUP>;
@@ -93,14 +95,6 @@ fn word(node: u32, k: u32) -> u32 {
     return atomicLoad(&node_words[node * 8u + k]);
 }
 
-fn node_min(node: u32) -> vec3<f32> {
-    return vec3<f32>(bitcast<f32>(word(node, 0u)), bitcast<f32>(word(node, 1u)), bitcast<f32>(word(node, 2u)));
-}
-
-fn node_max(node: u32) -> vec3<f32> {
-    return vec3<f32>(bitcast<f32>(word(node, 4u)), bitcast<f32>(word(node, 5u)), bitcast<f32>(word(node, 6u)));
-}
-
 fn is_leaf(node: u32) -> bool {
     return (word(node, 7u) & LEAF_FLAG) != 0u;
 }
@@ -130,15 +124,9 @@ fn combine_cost(a: f32, n: u32, children: f32) -> f32 {
 }
 
 fn write_internal(node: u32, lo: vec3<f32>, hi: vec3<f32>, left: u32, right: u32) {
-    let w = node * 8u;
-    atomicStore(&node_words[w + 0u], bitcast<u32>(lo.x));
-    atomicStore(&node_words[w + 1u], bitcast<u32>(lo.y));
-    atomicStore(&node_words[w + 2u], bitcast<u32>(lo.z));
-    atomicStore(&node_words[w + 3u], left);
-    atomicStore(&node_words[w + 4u], bitcast<u32>(hi.x));
-    atomicStore(&node_words[w + 5u], bitcast<u32>(hi.y));
-    atomicStore(&node_words[w + 6u], bitcast<u32>(hi.z));
-    atomicStore(&node_words[w + 7u], right);
+    store_box(node, lo, hi);
+    atomicStore(&node_words[node * 8u + 3u], left);
+    atomicStore(&node_words[node * 8u + 7u], right);
 }
 
 // Step 1, one invocation: grow the treelet below `root`.
@@ -156,7 +144,7 @@ fn form_treelet(root: u32) {
         for (var i = 0u; i < count; i++) {
             let node = treelet_leaves[i];
             if !is_leaf(node) {
-                let a = surface_area(node_min(node), node_max(node));
+                let a = surface_area(load_min(node), load_max(node));
                 if a > best_area {
                     best_area = a;
                     best = i;
@@ -173,8 +161,8 @@ fn form_treelet(root: u32) {
         count++;
     }
     for (var i = 0u; i < count; i++) {
-        leaf_min[i] = node_min(treelet_leaves[i]);
-        leaf_max[i] = node_max(treelet_leaves[i]);
+        leaf_min[i] = load_min(treelet_leaves[i]);
+        leaf_max[i] = load_max(treelet_leaves[i]);
     }
     leaf_count = count;
 }
@@ -338,7 +326,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
     workgroupBarrier();
     if j < n {
         atomicStore(&prim_counts[node], 1u);
-        atomicStore(&costs[node], bitcast<u32>(params.ct * surface_area(node_min(node), node_max(node))));
+        atomicStore(&costs[node], bitcast<u32>(params.ct * surface_area(load_min(node), load_max(node))));
         is_climbing = node != 0u;
         if is_climbing {
             atomicAdd(&climbing, 1u);
@@ -362,7 +350,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
             let left = word(node, 3u);
             let right = word(node, 7u);
             let prims = atomicLoad(&prim_counts[left]) + atomicLoad(&prim_counts[right]);
-            let a = surface_area(node_min(node), node_max(node));
+            let a = surface_area(load_min(node), load_max(node));
             atomicStore(&prim_counts[node], prims);
             atomicStore(&costs[node], bitcast<u32>(combine_cost(a, prims, get_cost(left) + get_cost(right))));
             if prims >= params.gamma {

@@ -23,6 +23,10 @@ const INCLUDES: &[(&str, &str)] = &[
     ),
     ("aabb.wgsl", include_str!("../../shaders/include/aabb.wgsl")),
     (
+        "node_words.wgsl",
+        include_str!("../../shaders/include/node_words.wgsl"),
+    ),
+    (
         "split_grid.wgsl",
         include_str!("../../shaders/include/split_grid.wgsl"),
     ),
