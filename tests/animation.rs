@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::gpu;
+use common::{assert_clean_failure, gpu, run_treelet};
 use treelet::anim::{
     load_animation, Animation, Explosion, Flag, RigidBodies, TreeUpdater, UpdateMode,
 };
@@ -153,26 +153,24 @@ fn refits_keep_valid_boxes_and_lose_quality_when_the_mesh_bursts() {
 fn headless_animation_writes_one_png_per_frame() {
     let out = std::env::temp_dir().join(format!("treelet-anim-frames-{}", std::process::id()));
     std::fs::remove_dir_all(&out).ok();
-    let xdg = std::env::temp_dir().join("treelet-test-xdg");
-    std::fs::create_dir_all(&xdg).unwrap();
-    let output = std::process::Command::new(env!("CARGO_BIN_EXE_treelet"))
-        .args([
-            "render", "--scene", "flag", "--frames", "3", "--width", "32",
-        ])
-        .args([
-            "--height",
-            "24",
-            "--spp",
-            "1",
-            "--builder",
-            "refit",
-            "--json",
-        ])
-        .arg("--out")
-        .arg(&out)
-        .env("XDG_RUNTIME_DIR", &xdg)
-        .output()
-        .expect("binary runs");
+    let output = run_treelet(&[
+        "render",
+        "--scene",
+        "flag",
+        "--frames",
+        "3",
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "--spp",
+        "1",
+        "--builder",
+        "refit",
+        "--json",
+        "--out",
+        out.to_str().expect("temp path is UTF-8"),
+    ]);
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(output.status.success(), "render failed: {stderr}");
     for frame in 0..3 {
@@ -229,8 +227,6 @@ fn bart_kitchen_through_the_animation_path_equals_evaluate() {
 
 #[test]
 fn animated_render_errors_are_clear() {
-    let xdg = std::env::temp_dir().join("treelet-test-xdg");
-    std::fs::create_dir_all(&xdg).unwrap();
     for (args, expected) in [
         (&["render", "--builder", "refit"][..], "--frames"),
         (
@@ -240,17 +236,6 @@ fn animated_render_errors_are_clear() {
         (&["render", "--frames", "0"][..], "--frames"),
         (&["render", "--json"][..], "--frames"),
     ] {
-        let output = std::process::Command::new(env!("CARGO_BIN_EXE_treelet"))
-            .args(args)
-            .env("XDG_RUNTIME_DIR", &xdg)
-            .output()
-            .expect("binary runs");
-        let stderr = String::from_utf8_lossy(&output.stderr);
-        assert!(!output.status.success(), "{args:?} succeeded");
-        assert!(!stderr.contains("panicked"), "{args:?} panicked: {stderr}");
-        assert!(
-            stderr.contains(expected),
-            "{args:?}: expected '{expected}' in {stderr}"
-        );
+        assert_clean_failure(args, expected);
     }
 }

@@ -1,28 +1,9 @@
 //! The `treelet` binary on bad input: a clear error message and a non-zero exit, never a panic.
 //! And on good input: `render` writes a PNG, `bench` prints valid JSON lines.
 
-use std::process::Command;
+mod common;
 
-fn treelet(args: &[&str]) -> std::process::Output {
-    let xdg = std::env::temp_dir().join("treelet-test-xdg");
-    std::fs::create_dir_all(&xdg).unwrap();
-    Command::new(env!("CARGO_BIN_EXE_treelet"))
-        .args(args)
-        .env("XDG_RUNTIME_DIR", &xdg)
-        .output()
-        .expect("binary runs")
-}
-
-fn assert_clean_failure(args: &[&str], expected: &str) {
-    let out = treelet(args);
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success(), "{args:?} succeeded");
-    assert!(!stderr.contains("panicked"), "{args:?} panicked: {stderr}");
-    assert!(
-        stderr.contains(expected),
-        "{args:?}: expected '{expected}' in: {stderr}"
-    );
-}
+use common::{assert_clean_failure, run_treelet as treelet};
 
 #[test]
 fn missing_scene_file_is_a_clear_error() {

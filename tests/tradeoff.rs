@@ -3,8 +3,10 @@
 //! `cornell` at a tiny resolution (CSV, JSON and PNG outputs).
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
+mod common;
+
+use common::run_treelet as treelet;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 use treelet::tradeoff::{best_ranges, effective_mrays, BestRange, Measurement, RAYS_RANGE};
@@ -142,16 +144,6 @@ fn ranges_match_a_brute_force_search() {
             );
         }
     }
-}
-
-fn treelet(args: &[&str]) -> std::process::Output {
-    let xdg = std::env::temp_dir().join("treelet-test-xdg");
-    std::fs::create_dir_all(&xdg).unwrap();
-    Command::new(env!("CARGO_BIN_EXE_treelet"))
-        .args(args)
-        .env("XDG_RUNTIME_DIR", &xdg)
-        .output()
-        .expect("binary runs")
 }
 
 fn out_dir(name: &str) -> PathBuf {

@@ -221,3 +221,26 @@ pub fn scene_named(name: &str, triangles: Vec<Triangle>) -> treelet::scene::Scen
         sky: Vec3::ONE,
     }
 }
+
+/// Runs the `treelet` binary with `args` (and a private XDG_RUNTIME_DIR).
+pub fn run_treelet(args: &[&str]) -> std::process::Output {
+    let xdg = std::env::temp_dir().join("treelet-test-xdg");
+    std::fs::create_dir_all(&xdg).unwrap();
+    std::process::Command::new(env!("CARGO_BIN_EXE_treelet"))
+        .args(args)
+        .env("XDG_RUNTIME_DIR", &xdg)
+        .output()
+        .expect("binary runs")
+}
+
+/// `treelet args` fails with a message containing `expected`, and without a panic.
+pub fn assert_clean_failure(args: &[&str], expected: &str) {
+    let out = run_treelet(args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{args:?} succeeded");
+    assert!(!stderr.contains("panicked"), "{args:?} panicked: {stderr}");
+    assert!(
+        stderr.contains(expected),
+        "{args:?}: expected '{expected}' in: {stderr}"
+    );
+}
