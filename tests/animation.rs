@@ -37,7 +37,7 @@ fn check_times(animation: &dyn Animation) -> Vec<f32> {
 /// The scene uploaded at its start time, as the viewer and the headless renderer do.
 fn upload(animation: &dyn Animation) -> GpuScene {
     let first = animation.scene_at(animation.time_range().start);
-    GpuScene::upload_geometry(gpu(), &first, 1, 1).unwrap()
+    GpuScene::upload_geometry(gpu(), &first).unwrap()
 }
 
 fn gpu_triangles(scene: &GpuScene) -> Vec<Triangle> {
@@ -211,7 +211,7 @@ fn bart_kitchen_through_the_animation_path_equals_evaluate() {
     let t0 = animation.time_range().start;
     // Upload a later frame, then animate back to frame 0 through the GPU scene.
     let later = animation.scene_at(animation.time_range().frame_time(200));
-    let mut scene = GpuScene::upload_geometry(gpu(), &later, 1, 1).unwrap();
+    let mut scene = GpuScene::upload_geometry(gpu(), &later).unwrap();
     animation.animate(gpu(), t0, &mut scene).unwrap();
     let mut expected = Vec::new();
     reference.evaluate(t0, &mut expected);

@@ -19,7 +19,7 @@ use treelet::trace::{closest_hits, GpuScene};
 fn check_stages_equal_cpu(triangles: Vec<Triangle>) {
     let scene = scene_of(triangles);
     let tris = &scene.triangles;
-    let mut gpu_scene = GpuScene::upload_geometry(gpu(), &scene, 1, 1).unwrap();
+    let mut gpu_scene = GpuScene::upload_geometry(gpu(), &scene).unwrap();
     let mut builder = LbvhBuilder::new(gpu());
     let stages = builder.build_stages(gpu(), &mut gpu_scene).unwrap();
 
@@ -126,7 +126,7 @@ fn degenerate_triangles() {
 #[test]
 fn zero_triangles_is_a_clear_error() {
     let scene = scene_of(Vec::new());
-    let err = GpuScene::upload_geometry(gpu(), &scene, 1, 1)
+    let err = GpuScene::upload_geometry(gpu(), &scene)
         .err()
         .expect("error");
     assert!(err.to_string().contains("no usable triangles"), "{err}");
@@ -137,7 +137,7 @@ fn zero_triangles_is_a_clear_error() {
 #[test]
 fn repeated_builds_are_identical_and_valid() {
     let scene = scene_of(random_soup(100_000, 21));
-    let mut gpu_scene = GpuScene::upload_geometry(gpu(), &scene, 1, 1).unwrap();
+    let mut gpu_scene = GpuScene::upload_geometry(gpu(), &scene).unwrap();
     let mut builder = LbvhBuilder::new(gpu());
     let reference = build_lbvh_cpu(&scene.triangles);
     validate(&reference, &scene.triangles).unwrap();
@@ -155,7 +155,7 @@ fn traced_hits_equal_brute_force() {
         load_scene("field-10k").unwrap(),
         scene_of(random_soup(3000, 8)),
     ] {
-        let mut gpu_scene = GpuScene::upload_geometry(gpu(), &scene, 1, 1).unwrap();
+        let mut gpu_scene = GpuScene::upload_geometry(gpu(), &scene).unwrap();
         LbvhBuilder::new(gpu())
             .build(gpu(), &mut gpu_scene)
             .unwrap();

@@ -84,7 +84,7 @@ fn gpu_split_equals_cpu_twin() {
     ] {
         let budget = split_budget(tris.len() as u32, percent);
         let scene = scene_of(tris.clone());
-        let gpu_scene = GpuScene::upload_geometry(gpu(), &scene, 1, 1).unwrap();
+        let gpu_scene = GpuScene::upload_geometry(gpu(), &scene).unwrap();
         let (gpu_boxes, gpu_tris) = splitter.split_and_read(gpu(), &gpu_scene, budget).unwrap();
         let (cpu_boxes, cpu_tris) = presplit_cpu(&tris, budget);
         assert_eq!(gpu_tris, cpu_tris, "references per triangle");
@@ -114,7 +114,7 @@ fn trbvh_split_trees_are_valid_and_hits_equal_brute_force() {
         load_scene("cornell").unwrap(),
         load_scene("field-10k").unwrap(),
     ] {
-        let mut gpu_scene = GpuScene::upload_geometry(gpu(), &scene, 1, 1).unwrap();
+        let mut gpu_scene = GpuScene::upload_geometry(gpu(), &scene).unwrap();
         builder.build(gpu(), &mut gpu_scene).unwrap();
         let bvh = gpu_scene.download_bvh(gpu()).unwrap();
         validate_with_references(&bvh, &scene.triangles).expect("valid trbvh-split tree");
@@ -148,7 +148,7 @@ fn zero_budget_gives_the_trbvh_tree() {
         split_percent: 0,
         ..TreeletSettings::BALANCED
     };
-    let mut gpu_scene = GpuScene::upload_geometry(gpu(), &scene, 1, 1).unwrap();
+    let mut gpu_scene = GpuScene::upload_geometry(gpu(), &scene).unwrap();
     TrbvhBuilder::new(gpu(), settings, sah)
         .unwrap()
         .build(gpu(), &mut gpu_scene)

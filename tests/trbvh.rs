@@ -127,7 +127,7 @@ fn dp_equals_brute_force_on_gpu() {
                     ..sah
                 };
                 let scene = scene_of(tris.clone());
-                let mut gpu_scene = GpuScene::upload_geometry(gpu(), &scene, 1, 1).unwrap();
+                let mut gpu_scene = GpuScene::upload_geometry(gpu(), &scene).unwrap();
                 let stages = builder.build_stages(gpu(), &mut gpu_scene).unwrap();
                 let leaves: Vec<TreeletLeaf> = tris
                     .iter()
@@ -170,7 +170,7 @@ fn check_gpu_equals_cpu_with(
 ) {
     builder.sah = sah;
     let scene = scene_of(triangles);
-    let mut gpu_scene = GpuScene::upload_geometry(gpu(), &scene, 1, 1).unwrap();
+    let mut gpu_scene = GpuScene::upload_geometry(gpu(), &scene).unwrap();
     builder.settings = settings;
     let stages = builder.build_stages(gpu(), &mut gpu_scene).unwrap();
     let cpu = optimize_cpu(&scene.triangles, &settings, &sah);
@@ -244,7 +244,7 @@ fn sah_never_increases_and_hits_equal_brute_force() {
         scene_of(random_soup(4000, 9)),
     ] {
         let lbvh = build_lbvh_cpu(&scene.triangles);
-        let mut gpu_scene = GpuScene::upload_geometry(gpu(), &scene, 1, 1).unwrap();
+        let mut gpu_scene = GpuScene::upload_geometry(gpu(), &scene).unwrap();
         let mut builder = TrbvhBuilder::new(gpu(), TreeletSettings::BALANCED, sah).unwrap();
         builder.build(gpu(), &mut gpu_scene).unwrap();
         let bvh = gpu_scene.download_bvh(gpu()).unwrap();
@@ -269,7 +269,7 @@ fn repeated_builds_are_identical_and_valid() {
     let scene = scene_of(random_soup(20_000, 77));
     let expected = build_trbvh_cpu(&scene.triangles, &TreeletSettings::BALANCED, &sah);
     validate(&expected, &scene.triangles).unwrap();
-    let mut gpu_scene = GpuScene::upload_geometry(gpu(), &scene, 1, 1).unwrap();
+    let mut gpu_scene = GpuScene::upload_geometry(gpu(), &scene).unwrap();
     let mut builder = TrbvhBuilder::new(gpu(), TreeletSettings::BALANCED, sah).unwrap();
     for round in 0..100 {
         builder.build(gpu(), &mut gpu_scene).unwrap();

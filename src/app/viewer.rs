@@ -551,7 +551,7 @@ fn load_and_build(
         (load_scene(name)?, None)
     };
     let scene = Arc::new(scene);
-    let mut gpu_scene = GpuScene::upload_geometry(ctx, &scene, 1, 1)?;
+    let mut gpu_scene = GpuScene::upload_geometry(ctx, &scene)?;
     let timing = builder.build(ctx, &scene, &settings.sah_params(), &mut gpu_scene)?;
     Ok(LoadedScene {
         scene,

@@ -145,7 +145,7 @@ impl Builder {
                 build_sbvh(&scene.triangles, params)
             }),
             Builder::Lbvh | Builder::Trbvh(_) | Builder::TrbvhSplit(_) => {
-                let mut gpu_scene = GpuScene::upload_geometry(ctx, scene, 1, 1)?;
+                let mut gpu_scene = GpuScene::upload_geometry(ctx, scene)?;
                 let mut builder = GpuBuilder::new(ctx, self, params)?;
                 builder.build(ctx, &mut gpu_scene)?;
                 let mut reports = Vec::new();

@@ -85,7 +85,7 @@ pub fn run(gpu: &GpuContext, args: &RenderArgs, frames: u32) -> Result<()> {
         animation.stage().describe(),
         mode.label()
     );
-    let mut gpu_scene = GpuScene::upload_geometry(gpu, &first, 1, 1)?;
+    let mut gpu_scene = GpuScene::upload_geometry(gpu, &first)?;
     let mut updater = if mode.is_gpu() {
         Some(TreeUpdater::new(gpu, mode, &params)?)
     } else {

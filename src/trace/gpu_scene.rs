@@ -25,7 +25,7 @@ impl GpuScene {
         if bvh.nodes.is_empty() {
             return Err(Error::EmptyScene(scene.name.clone()));
         }
-        let mut gpu = Self::upload_geometry(ctx, scene, 1, 1)?;
+        let mut gpu = Self::upload_geometry(ctx, scene)?;
         gpu.nodes = storage_buffer(ctx, "bvh nodes", &bvh.nodes)?;
         gpu.prim_indices = storage_buffer(ctx, "prim indices", &bvh.prim_indices)?;
         gpu.node_count = bvh.nodes.len() as u32;
@@ -33,14 +33,9 @@ impl GpuScene {
         Ok(gpu)
     }
 
-    /// Uploads triangles and materials, with zeroed tree buffers of the given capacities for a GPU
-    /// builder to fill.
-    pub fn upload_geometry(
-        ctx: &GpuContext,
-        scene: &Scene,
-        node_capacity: u64,
-        prim_capacity: u64,
-    ) -> Result<Self> {
+    /// Uploads triangles and materials with empty (one-element) tree buffers: GPU builders size
+    /// them on their first build.
+    pub fn upload_geometry(ctx: &GpuContext, scene: &Scene) -> Result<Self> {
         if scene.triangles.is_empty() {
             return Err(Error::EmptyScene(scene.name.clone()));
         }
@@ -49,12 +44,8 @@ impl GpuScene {
         Ok(Self {
             triangles: storage_buffer(ctx, "triangles", &scene.triangles)?,
             materials: storage_buffer(ctx, "materials", &scene.materials)?,
-            nodes: storage_buffer_zeroed(
-                ctx,
-                "bvh nodes",
-                node_capacity * std::mem::size_of::<BvhNode>() as u64,
-            )?,
-            prim_indices: storage_buffer_zeroed(ctx, "prim indices", prim_capacity * 4)?,
+            nodes: storage_buffer_zeroed(ctx, "bvh nodes", std::mem::size_of::<BvhNode>() as u64)?,
+            prim_indices: storage_buffer_zeroed(ctx, "prim indices", 4)?,
             triangle_count,
             node_count: 0,
             prim_count: 0,
