@@ -36,7 +36,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let lo = min(t.v0, min(t.v1, t.v2));
     let hi = max(t.v0, max(t.v1, t.v2));
     let grid = split_grid();
-    let bit = highest_differing_bit(quantize(grid, lo), quantize(grid, hi));
+    let cells = cell_range(grid, lo, hi);
+    let bit = highest_differing_bit(cells.first, cells.last);
     var q = 0.0;
     if bit != NO_BIT {
         let d1 = t.v1 - t.v0;

@@ -1,11 +1,13 @@
 // Pre-splitting step 3 (Karras & Aila 2013, §5): each triangle becomes its s_t + 1 references.
-// Pieces are split recursively at the Morton-grid plane of the piece box's highest differing
-// Morton bit (axis = that bit's axis, plane on the power-of-two subdivision of the scene's cubic
-// grid, so neighbouring triangles' splits agree); each side is the box of the triangle clipped to
-// the piece box on that side (Sutherland–Hodgman), and the remaining pieces are shared by the two
-// sides' extents. A piece that cannot be split (one grid cell, or clipping leaves a side empty)
-// is emitted as often as it still owes references, so every triangle writes exactly its count.
-// Writes the reference boxes and each reference's triangle, at the triangle's scanned offset.
+// Pieces are split recursively at the coarsest Morton-grid plane crossing the piece box (see
+// `split_plane`; planes on the power-of-two subdivision of the scene's cubic grid, so neighbouring
+// triangles' splits agree). Only planes strictly inside the box count: a piece whose side was cut
+// at a plane must not be "split" there again, which would emit copies of the same box. Each side
+// is the box of the triangle clipped to the piece box on that side (Sutherland–Hodgman), and the
+// remaining pieces are shared by the two sides' extents. A piece that cannot be split (inside one
+// grid cell, or clipping leaves a side empty) is emitted as often as it still owes references, so
+// every triangle writes exactly its count. Writes the reference boxes and each reference's
+// triangle, at the triangle's scanned offset.
 #include "bvh_node.wgsl"
 #include "aabb.wgsl"
 
@@ -89,6 +91,38 @@ fn clip_triangle(t: Triangle, lo: vec3<f32>, hi: vec3<f32>) -> Clipped {
     return out;
 }
 
+const NO_AXIS: u32 = 3u;
+
+struct SplitPlane {
+    // NO_AXIS when no grid plane crosses the piece.
+    axis: u32,
+    position: f32,
+}
+
+// The split plane of a piece box: on each axis, the grid plane of the highest bit in which the
+// first and last overlapped cells differ (the coarsest Morton-grid plane crossing the box on that
+// axis); of the planes strictly inside the box, the one of the highest level, ties in Morton bit
+// order (x, y, z).
+fn split_plane(grid: SplitGrid, lo: vec3<f32>, hi: vec3<f32>) -> SplitPlane {
+    let cells = cell_range(grid, lo, hi);
+    var best = SplitPlane(NO_AXIS, 0.0);
+    var best_level = 0u;
+    for (var axis = 0u; axis < 3u; axis++) {
+        let differing = cells.first[axis] ^ cells.last[axis];
+        if differing == 0u {
+            continue;
+        }
+        let level = 31u - countLeadingZeros(differing);
+        let position = grid.scene_min[axis] + unfused(f32((cells.last[axis] >> level) << level) * grid.cell);
+        let inside = lo[axis] < position && position < hi[axis];
+        if inside && (best.axis == NO_AXIS || level > best_level) {
+            best = SplitPlane(axis, position);
+            best_level = level;
+        }
+    }
+    return best;
+}
+
 fn max_extent(lo: vec3<f32>, hi: vec3<f32>) -> f32 {
     let e = hi - lo;
     return max(e.x, max(e.y, e.z));
@@ -117,18 +151,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         var left = Clipped(piece.lo, piece.hi, false);
         var right = left;
         if split {
-            let qa = quantize(grid, piece.lo);
-            let qb = quantize(grid, piece.hi);
-            let bit = highest_differing_bit(qa, qb);
-            split = bit != NO_BIT;
+            let plane = split_plane(grid, piece.lo, piece.hi);
+            split = plane.axis != NO_AXIS;
             if split {
-                let axis = 2u - bit % 3u;
-                let level = bit / 3u;
-                let plane = grid.scene_min[axis] + unfused(f32((qb[axis] >> level) << level) * grid.cell);
                 var left_hi = piece.hi;
-                left_hi[axis] = plane;
+                left_hi[plane.axis] = plane.position;
                 var right_lo = piece.lo;
-                right_lo[axis] = plane;
+                right_lo[plane.axis] = plane.position;
                 left = clip_triangle(t, piece.lo, left_hi);
                 right = clip_triangle(t, right_lo, piece.hi);
                 split = !left.empty && !right.empty;

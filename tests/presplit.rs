@@ -1,5 +1,5 @@
 //! Triangle pre-splitting (Karras & Aila 2013, §5): reference boxes are non-empty and inside their
-//! triangle's box and together cover it; the reference count respects the budget; the GPU stage
+//! triangle's box and together cover it; one triangle's references are distinct pieces; the reference count respects the budget; the GPU stage
 //! equals its CPU twin (counts exactly, boxes to rounding); whole trbvh-split trees match the CPU
 //! twin's quality; β = 0 gives the trbvh tree exactly; rays traced through trbvh-split trees
 //! equal brute force.
@@ -47,6 +47,21 @@ fn check_fragments(triangles: &[Triangle], boxes: &[Aabb], ref_tris: &[u32], bud
             "fragment {b:?} outside triangle {t}'s box {tb:?}"
         );
         union[t as usize] = union[t as usize].union(*b);
+    }
+    // Every triangle here spans many grid cells, so each reference must be a different piece: a
+    // copy of a box would spend budget on nothing (a piece cut at a grid plane must not be split
+    // at that plane again).
+    let mut pieces: Vec<(u32, [u32; 6])> = ref_tris
+        .iter()
+        .zip(boxes)
+        .map(|(&t, b)| {
+            let bits = [b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z].map(f32::to_bits);
+            (t, bits)
+        })
+        .collect();
+    pieces.sort_unstable();
+    if let Some(w) = pieces.windows(2).find(|w| w[0] == w[1]) {
+        panic!("triangle {} has two references with the same box", w[0].0);
     }
     for (t, (tri, u)) in triangles.iter().zip(&union).enumerate() {
         let tb = tri.bounds();

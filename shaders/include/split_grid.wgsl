@@ -30,8 +30,18 @@ fn split_grid() -> SplitGrid {
     return SplitGrid(b.min, 0.0, 0.0);
 }
 
-fn quantize(grid: SplitGrid, p: vec3<f32>) -> vec3<u32> {
-    return vec3<u32>(clamp((p - grid.scene_min) * grid.scale, vec3<f32>(0.0), vec3<f32>(GRID_MAX)));
+// The first and last grid cells a box [lo, hi] overlaps on each axis. The last is the cell below
+// hi when hi lies exactly on a cell boundary (a piece cut at a grid plane does not reach into the
+// next cell).
+struct CellRange {
+    first: vec3<u32>,
+    last: vec3<u32>,
+}
+
+fn cell_range(grid: SplitGrid, lo: vec3<f32>, hi: vec3<f32>) -> CellRange {
+    let first = clamp(floor((lo - grid.scene_min) * grid.scale), vec3<f32>(0.0), vec3<f32>(GRID_MAX));
+    let last = max(clamp(ceil((hi - grid.scene_min) * grid.scale) - 1.0, vec3<f32>(0.0), vec3<f32>(GRID_MAX)), first);
+    return CellRange(vec3<u32>(first), vec3<u32>(last));
 }
 
 // Highest bit in which the Morton codes of two grid points differ (bit 3k+2 is x's bit k, 3k+1

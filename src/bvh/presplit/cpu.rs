@@ -39,9 +39,17 @@ impl SplitGrid {
         }
     }
 
-    fn quantize(&self, p: Vec3) -> UVec3 {
-        let q = ((p - self.scene_min) * self.scale).clamp(Vec3::ZERO, Vec3::splat(GRID_MAX));
-        UVec3::new(q.x as u32, q.y as u32, q.z as u32)
+    /// The first and last grid cells a box [lo, hi] overlaps on each axis. The last is the cell
+    /// below hi when hi lies exactly on a cell boundary (a piece cut at a grid plane does not
+    /// reach into the next cell). See `cell_range` in `split_grid.wgsl`.
+    fn cell_range(&self, lo: Vec3, hi: Vec3) -> (UVec3, UVec3) {
+        let first = ((lo - self.scene_min) * self.scale)
+            .floor()
+            .clamp(Vec3::ZERO, Vec3::splat(GRID_MAX));
+        let last = (((hi - self.scene_min) * self.scale).ceil() - Vec3::ONE)
+            .clamp(Vec3::ZERO, Vec3::splat(GRID_MAX))
+            .max(first);
+        (first.as_uvec3(), last.as_uvec3())
     }
 }
 
@@ -64,7 +72,8 @@ fn box_area(lo: Vec3, hi: Vec3) -> f32 {
 pub fn split_priority(t: &Triangle, grid: &SplitGrid) -> f32 {
     let [v0, v1, v2] = t.vertices();
     let (lo, hi) = (v0.min(v1.min(v2)), v0.max(v1.max(v2)));
-    let Some(bit) = highest_differing_bit(grid.quantize(lo), grid.quantize(hi)) else {
+    let (first, last) = grid.cell_range(lo, hi);
+    let Some(bit) = highest_differing_bit(first, last) else {
         return 0.0;
     };
     let (d1, d2) = (v1 - v0, v2 - v0);
@@ -153,6 +162,30 @@ fn clip_triangle(t: &Triangle, lo: Vec3, hi: Vec3) -> Option<(Vec3, Vec3)> {
     Some((plo.clamp(lo, hi), phi.clamp(lo, hi)))
 }
 
+/// The split plane of a piece box [lo, hi] as (axis, position): on each axis, the grid plane of
+/// the highest bit in which the first and last overlapped cells differ (the coarsest Morton-grid
+/// plane crossing the box on that axis); of the planes strictly inside the box, the one of the
+/// highest level, ties in Morton bit order (x, y, z). None when no grid plane crosses the box.
+/// See `split_plane` in `triangles_split.wgsl`.
+fn split_plane(grid: &SplitGrid, lo: Vec3, hi: Vec3) -> Option<(usize, f32)> {
+    let (first, last) = grid.cell_range(lo, hi);
+    let mut best: Option<(u32, usize, f32)> = None;
+    for axis in 0..3 {
+        let differing = first[axis] ^ last[axis];
+        if differing == 0 {
+            continue;
+        }
+        let level = 31 - differing.leading_zeros();
+        let cells = ((last[axis] >> level) << level) as f32;
+        let plane = grid.scene_min[axis] + cells * grid.cell;
+        let inside = lo[axis] < plane && plane < hi[axis];
+        if inside && best.is_none_or(|(l, _, _)| level > l) {
+            best = Some((level, axis, plane));
+        }
+    }
+    best.map(|(_, axis, plane)| (axis, plane))
+}
+
 /// The `pieces` reference boxes of triangle `t` (see `triangles_split.wgsl`).
 pub fn split_triangle(t: &Triangle, pieces: u32, grid: &SplitGrid) -> Vec<Aabb> {
     const MAX_PIECES: usize = 32;
@@ -162,11 +195,7 @@ pub fn split_triangle(t: &Triangle, pieces: u32, grid: &SplitGrid) -> Vec<Aabb> 
     while let Some((lo, hi, n)) = stack.pop() {
         let mut halves = None;
         if n > 1 && stack.len() + 2 <= MAX_PIECES {
-            if let Some(bit) = highest_differing_bit(grid.quantize(lo), grid.quantize(hi)) {
-                let axis = (2 - bit % 3) as usize;
-                let level = bit / 3;
-                let qb = grid.quantize(hi)[axis];
-                let plane = grid.scene_min[axis] + ((qb >> level) << level) as f32 * grid.cell;
+            if let Some((axis, plane)) = split_plane(grid, lo, hi) {
                 let (mut left_hi, mut right_lo) = (hi, lo);
                 left_hi[axis] = plane;
                 right_lo[axis] = plane;
