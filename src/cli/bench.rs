@@ -9,7 +9,7 @@ use serde::Serialize;
 use treelet::bvh::{sah_cost, validate, validate_with_references, write_bvh, Builder};
 use treelet::gpu::{aggregate_stages, GpuContext};
 use treelet::scene::load_scene;
-use treelet::trace::PathTracer;
+use treelet::trace::{PathTracer, TraceStats};
 use treelet::Result;
 
 use super::{parse_builder, TraceArgs};
@@ -31,7 +31,7 @@ pub struct BenchArgs {
     /// builder label is added to the file name)
     #[arg(long)]
     export_bvh: Option<PathBuf>,
-    /// Timed builds per GPU builder (the median is reported)
+    /// Timed builds per GPU builder and timed traces per builder (the medians are reported)
     #[arg(long, default_value_t = 5)]
     repeats: u32,
 }
@@ -45,6 +45,9 @@ struct BenchRecord {
     split_budget: Option<f64>,
     adapter: String,
     triangles: usize,
+    /// Triangle references in the leaves: the triangle count, plus the pieces of split
+    /// triangles that ended up in different leaves (sbvh, trbvh-split).
+    references: usize,
     nodes: usize,
     leaves: usize,
     build_ms: f64,
@@ -91,8 +94,12 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
         for _ in 0..args.warmup {
             tracer.trace(gpu, &gpu_scene, &scene.camera, scene.sky, 1)?;
         }
-        tracer.reset(gpu);
-        let stats = tracer.trace(gpu, &gpu_scene, &scene.camera, scene.sky, args.trace.spp)?;
+        let mut traces = Vec::new();
+        for _ in 0..args.repeats.max(1) {
+            tracer.reset(gpu);
+            traces.push(tracer.trace(gpu, &gpu_scene, &scene.camera, scene.sky, args.trace.spp)?);
+        }
+        let stats = median_trace(traces);
         let record = BenchRecord {
             scene: scene.name.clone(),
             builder: builder.name(),
@@ -103,6 +110,7 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
                 .map(|s| f64::from(s.split_percent) / 100.0),
             adapter: gpu.adapter_description(),
             triangles: scene.triangles.len(),
+            references: bvh.prim_indices.len(),
             nodes: bvh.nodes.len(),
             leaves: bvh.leaf_count(),
             build_ms: report.build_ms,
@@ -129,6 +137,16 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The trace of median throughput (GPU time where timestamps exist, wall-clock time otherwise).
+fn median_trace(mut traces: Vec<TraceStats>) -> TraceStats {
+    let key = |t: &TraceStats| {
+        t.mrays_per_s()
+            .unwrap_or(t.rays as f64 / t.wall_ms.max(1e-9))
+    };
+    traces.sort_by(|a, b| key(a).total_cmp(&key(b)));
+    traces.swap_remove(traces.len() / 2)
 }
 
 /// `out.bvh` + "trbvh n=7 r=3" -> `out-trbvh-n7-r3.bvh`.
