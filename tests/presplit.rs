@@ -8,7 +8,9 @@ mod common;
 
 use common::{assert_hits_match, gpu, random_soup, scene_of, test_rays};
 use glam::Vec3;
-use treelet::bvh::presplit::{presplit_cpu, split_budget, PreSplitter};
+use treelet::bvh::presplit::{
+    budget_scale, presplit_cpu, split_budget, split_priority, splits_at, PreSplitter, SplitGrid,
+};
 use treelet::bvh::treelet::{
     build_trbvh_cpu, build_trbvh_split_cpu, TrbvhBuilder, TreeletSettings,
 };
@@ -89,6 +91,32 @@ fn cpu_fragments_cover_triangles_within_budget() {
     assert!(boxes.len() > tris.len(), "slivers were not split");
 }
 
+/// The budget search finds the largest scale whose split counts fit: Σ s_t ≤ budget at E, and
+/// over budget at the next larger float (the whole budget is used when the priorities allow).
+#[test]
+fn budget_search_finds_the_largest_scale_that_fits() {
+    for (tris, percent) in [
+        (load_scene("field-100k").unwrap().triangles, 10),
+        (load_scene("field-100k").unwrap().triangles, 50),
+        (random_soup(20_000, 9), 30),
+        (slivers(), 100),
+    ] {
+        let scene = tris.iter().fold(Aabb::EMPTY, |b, t| b.union(t.bounds()));
+        let grid = SplitGrid::new(&scene);
+        let priorities: Vec<f32> = tris.iter().map(|t| split_priority(t, &grid)).collect();
+        let budget = split_budget(tris.len() as u32, percent);
+        let used = |e: f32| -> u64 { priorities.iter().map(|&q| u64::from(splits_at(e, q))).sum() };
+        let e = budget_scale(&priorities, budget);
+        assert!(used(e) <= u64::from(budget), "over budget");
+        let next = f32::from_bits(e.to_bits() + 1);
+        assert!(
+            used(next) > u64::from(budget),
+            "{percent}%: scale {e} is not the largest that fits ({} of {budget} used)",
+            used(e)
+        );
+    }
+}
+
 #[test]
 fn gpu_split_equals_cpu_twin() {
     let mut splitter = PreSplitter::new(gpu());
@@ -96,6 +124,8 @@ fn gpu_split_equals_cpu_twin() {
         (slivers(), 30),
         (load_scene("field-10k").unwrap().triangles, 50),
         (load_scene("cornell").unwrap().triangles, 30),
+        // Large budget: a search interval spanning many orders of magnitude.
+        (load_scene("field-100k").unwrap().triangles, 30),
     ] {
         let budget = split_budget(tris.len() as u32, percent);
         let scene = scene_of(tris.clone());

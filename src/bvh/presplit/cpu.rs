@@ -10,7 +10,7 @@ use crate::scene::Triangle;
 /// Splits per triangle at most (pieces = splits + 1 ≤ 32).
 pub const MAX_SPLITS: u32 = 31;
 /// Bisection steps of the budget search.
-pub const BISECTION_STEPS: u32 = 40;
+pub const BISECTION_STEPS: u32 = 32;
 const GRID: f32 = 2_097_152.0;
 const GRID_MAX: f32 = 2_097_151.0;
 
@@ -101,25 +101,26 @@ pub fn splits_at(e: f32, q: f32) -> u32 {
     k
 }
 
-/// E = D³ of the budget search: the bisection of `splits_budget.wgsl`.
+/// E = D³ of the budget search: the bisection of `splits_budget.wgsl`, on the bit patterns of E
+/// (non-negative floats order like their bits, so integer midpoints halve the interval exactly
+/// and 32 halvings span every float from 0 to the upper bound).
 pub fn budget_scale(priorities: &[f32], budget: u32) -> f32 {
     let q_max = priorities.iter().copied().fold(0.0f32, f32::max);
     let b = (budget + 1) as f32;
     let hi0 = if q_max > 0.0 { b * b * b / q_max } else { 0.0 };
-    let (mut lo, mut hi, mut mid) = (0.0f32, hi0, hi0 * 0.5);
+    let (mut lo, mut hi) = (0u32, hi0.to_bits());
+    let mut mid = hi / 2;
     for _ in 0..BISECTION_STEPS {
-        let sum: u64 = priorities
-            .iter()
-            .map(|&q| u64::from(splits_at(mid, q)))
-            .sum();
+        let e = f32::from_bits(mid);
+        let sum: u64 = priorities.iter().map(|&q| u64::from(splits_at(e, q))).sum();
         if sum <= u64::from(budget) {
             lo = mid;
         } else {
             hi = mid;
         }
-        mid = (lo + hi) * 0.5;
+        mid = lo + (hi - lo) / 2;
     }
-    lo
+    f32::from_bits(lo)
 }
 
 /// The box of triangle `t` clipped to [lo, hi] (Sutherland–Hodgman), or None if nothing is left.
