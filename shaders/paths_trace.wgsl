@@ -1,7 +1,10 @@
 // Diffuse path tracing: one invocation per pixel, `samples` paths per pixel per dispatch, each
-// with up to `max_depth` closest-hit rays (cosine-weighted bounces, emissive surfaces and a sky
-// as light). Radiance sums accumulate progressively in `accum` (rgb sum, sample count in w).
-// Every traced ray is counted (workgroup reduction, then one global atomic per workgroup).
+// with up to `max_depth` closest-hit rays (cosine-weighted bounces; emissive surfaces, a sky and
+// point lights as light). At every path vertex each point light is sampled with a shadow ray
+// (next-event estimation) and adds albedo · intensity · cos θ when visible, with no distance
+// falloff (the BART scenes' Whitted-style light convention, see `PointLight`). Radiance sums
+// accumulate progressively in `accum` (rgb sum, sample count in w). Every traced ray, bounce and
+// shadow, is counted (workgroup reduction, then one global atomic per workgroup).
 #include "bvh_traverse.wgsl"
 #include "random.wgsl"
 
@@ -17,6 +20,12 @@ struct TraceParams {
     max_depth: u32,
     sky: vec3<f32>,
     samples: u32,
+    light_count: u32,
+}
+
+struct PointLight {
+    position: vec3<f32>,
+    intensity: vec3<f32>,
 }
 
 @group(0) @binding(0) var<uniform> params: TraceParams;
@@ -27,6 +36,7 @@ struct TraceParams {
 @group(0) @binding(5) var<storage, read_write> accum: array<vec4<f32>>;
 // [0]: rays traced, [1]: stack overflows
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>>;
+@group(0) @binding(7) var<storage, read> lights: array<PointLight>;
 
 var<workgroup> workgroup_rays: atomic<u32>;
 
@@ -94,6 +104,20 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
                 let p = origin + hit.t * dir;
                 let eps = 1e-4 * max(1.0, max(abs(p.x), max(abs(p.y), abs(p.z))));
                 origin = p + n * eps;
+                for (var l = 0u; l < params.light_count; l++) {
+                    let light = lights[l];
+                    let to_light = light.position - origin;
+                    let distance = length(to_light);
+                    let cos_theta = dot(n, to_light) / max(distance, 1e-30);
+                    if cos_theta > 0.0 {
+                        let shadow = trace_closest(origin, to_light / distance, 0.0, distance);
+                        rays++;
+                        overflows += shadow.overflow;
+                        if shadow.hit.tri == MISS {
+                            radiance += throughput * light.intensity * cos_theta;
+                        }
+                    }
+                }
                 dir = cosine_direction(n, &rng);
             }
             sum += radiance;

@@ -7,7 +7,7 @@ use glam::{Quat, Vec3};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
-use treelet::scene::{shared_scenes_dir, BartScene, Triangle, CONE_SIDES};
+use treelet::scene::{shared_scenes_dir, BartScene, PointLight, Triangle, CONE_SIDES};
 use treelet::Error;
 
 /// A fresh temporary folder holding the given (relative path, contents) files.
@@ -414,11 +414,11 @@ fn materials_take_the_diffuse_colour_and_carry_over() {
 }
 
 #[test]
-fn view_animation_range_and_background() {
+fn view_animation_range_background_and_lights() {
     let scene = load(
         "b 0.5 0.5 1.0\n\
          v\nfrom 0 0 10\nat 0 0 0\nup 0 1 0\nangle 40\nhither 0.01\nresolution 800 600\n\
-         l 1 2 3\nl 1 2 3 1 1 1\nam 0.2 0.2 0.2\n\
+         l 1 2 3\nl 4 5 6 0.3 0.2 0.1\nla lamp 7 8 9 1 1 1\nam 0.2 0.2 0.2\n\
          a 2.0 6.0 5  % five frames\n\
          p 3 0 0 0  1 0 0  0 1 0\n",
     );
@@ -432,6 +432,14 @@ fn view_animation_range_and_background() {
     assert_eq!(s.camera.fov_y_degrees, 40.0);
     assert_eq!(s.sky, Vec3::new(0.5, 0.5, 1.0));
     assert_eq!(s.name, "scene");
+    // Static lights keep their colour (white without one); the animated `la` light is dropped.
+    assert_eq!(
+        s.lights,
+        vec![
+            PointLight::new(Vec3::new(1.0, 2.0, 3.0), Vec3::ONE),
+            PointLight::new(Vec3::new(4.0, 5.0, 6.0), Vec3::new(0.3, 0.2, 0.1)),
+        ]
+    );
 
     // The `camera` animation moves the view: position from transl, −z of the rotation forward.
     let animated = load(

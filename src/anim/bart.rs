@@ -10,7 +10,7 @@ use glam::Vec3;
 
 use super::{check_triangle_count, AnimateStage, Animation, TimeRange};
 use crate::gpu::{GpuContext, StageTime};
-use crate::scene::{BartScene, Camera, Material, Triangle};
+use crate::scene::{BartScene, Camera, Material, PointLight, Triangle};
 use crate::trace::GpuScene;
 use crate::{Error, Result};
 
@@ -61,6 +61,10 @@ impl Animation for BartAnimation {
 
     fn sky(&self) -> Vec3 {
         self.scene.sky()
+    }
+
+    fn lights(&self) -> &[PointLight] {
+        self.scene.lights()
     }
 
     fn stage(&self) -> AnimateStage {

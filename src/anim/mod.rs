@@ -47,7 +47,7 @@ pub use update_mode::{TreeUpdater, UpdateMode};
 use glam::Vec3;
 
 use crate::gpu::{GpuContext, StageTime};
-use crate::scene::{Camera, Material, Scene, Triangle};
+use crate::scene::{Camera, Material, PointLight, Scene, Triangle};
 use crate::trace::GpuScene;
 use crate::{Error, Result};
 
@@ -92,6 +92,11 @@ pub trait Animation {
     /// Radiance of the sky (see `Scene::sky`).
     fn sky(&self) -> Vec3;
 
+    /// Point lights (see `Scene::lights`); fixed over time.
+    fn lights(&self) -> &[PointLight] {
+        &[]
+    }
+
     /// Where `animate` computes the triangles.
     fn stage(&self) -> AnimateStage;
 
@@ -113,6 +118,7 @@ pub trait Animation {
             materials: self.materials().to_vec(),
             camera: self.camera(t),
             sky: self.sky(),
+            lights: self.lights().to_vec(),
         }
     }
 }

@@ -38,6 +38,8 @@ impl Companion {
         let scene = GpuScene {
             triangles: traced.triangles.clone(),
             materials: traced.materials.clone(),
+            lights: traced.lights.clone(),
+            light_count: traced.light_count,
             nodes: storage_buffer_zeroed(ctx, "companion nodes", 32)?,
             prim_indices: storage_buffer_zeroed(ctx, "companion prim indices", 4)?,
             triangle_count: traced.triangle_count,

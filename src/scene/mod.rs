@@ -1,4 +1,5 @@
-//! Scenes: triangles with material ids, materials (diffuse albedo + emission), a camera and a sky.
+//! Scenes: triangles with material ids, materials (diffuse albedo + emission), point lights, a
+//! camera and a sky.
 //! Sources: OBJ files (`obj`), procedural built-ins (`procedural`), looked up by name or path in
 //! `registry`. Every scene passes through `sanitize` (the documented bad-geometry policy).
 
@@ -71,6 +72,30 @@ pub struct Material {
 }
 const _: () = assert!(std::mem::size_of::<Material>() == 32);
 
+/// A point light as the GPU reads it (32 bytes). It lights diffuse surfaces with
+/// `albedo · intensity · cos θ` and no distance falloff: the convention of the BART scenes'
+/// Whitted-style lights (`l x y z r g b`), the only source of point lights.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct PointLight {
+    pub position: [f32; 3],
+    pub _pad0: f32,
+    pub intensity: [f32; 3],
+    pub _pad1: f32,
+}
+const _: () = assert!(std::mem::size_of::<PointLight>() == 32);
+
+impl PointLight {
+    pub fn new(position: Vec3, intensity: Vec3) -> Self {
+        Self {
+            position: position.to_array(),
+            _pad0: 0.0,
+            intensity: intensity.to_array(),
+            _pad1: 0.0,
+        }
+    }
+}
+
 impl Material {
     pub fn diffuse(albedo: Vec3) -> Self {
         Self::new(albedo, Vec3::ZERO)
@@ -95,6 +120,8 @@ pub struct Scene {
     pub camera: Camera,
     /// Radiance of the sky seen by rays that leave the scene (zenith colour; the horizon is darker).
     pub sky: Vec3,
+    /// Point lights (sampled with shadow rays at every path vertex); none for OBJ scenes.
+    pub lights: Vec<PointLight>,
 }
 
 impl Scene {

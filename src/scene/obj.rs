@@ -143,6 +143,7 @@ pub fn load_obj(path: &Path) -> Result<Scene> {
         triangles,
         materials,
         sky,
+        lights: Vec::new(),
     })
 }
 

@@ -139,6 +139,7 @@ pub fn cornell_box() -> Scene {
             fov_y_degrees: 40.0,
         },
         sky: Vec3::ZERO,
+        lights: Vec::new(),
     }
 }
 
@@ -248,6 +249,7 @@ pub fn tessellated_field(cells_per_side: u32) -> Scene {
             fov_y_degrees: 50.0,
         },
         sky: Vec3::ONE,
+        lights: Vec::new(),
     }
 }
 

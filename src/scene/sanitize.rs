@@ -130,6 +130,7 @@ mod tests {
                 fov_y_degrees: 45.0,
             },
             sky: Vec3::ONE,
+            lights: Vec::new(),
         }
     }
 

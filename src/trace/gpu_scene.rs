@@ -1,14 +1,18 @@
-//! A scene and its BVH resident on the GPU: triangles, materials, nodes and primitive references.
+//! A scene and its BVH resident on the GPU: triangles, materials, point lights, nodes and primitive
+//! references.
 //! CPU-built trees are uploaded once; GPU builders write `nodes`/`prim_indices` in place each frame.
 
 use crate::bvh::{Bvh, BvhNode};
 use crate::gpu::{read_buffer, storage_buffer, storage_buffer_zeroed, GpuContext};
-use crate::scene::Scene;
+use crate::scene::{PointLight, Scene};
 use crate::{Error, Result};
 
 pub struct GpuScene {
     pub triangles: wgpu::Buffer,
     pub materials: wgpu::Buffer,
+    /// The scene's point lights (one zeroed entry when it has none).
+    pub lights: wgpu::Buffer,
+    pub light_count: u32,
     pub nodes: wgpu::Buffer,
     pub prim_indices: wgpu::Buffer,
     pub triangle_count: u32,
@@ -33,7 +37,7 @@ impl GpuScene {
         Ok(gpu)
     }
 
-    /// Uploads triangles and materials with empty (one-element) tree buffers: GPU builders size
+    /// Uploads triangles, materials and lights with empty (one-element) tree buffers: GPU builders size
     /// them on their first build.
     pub fn upload_geometry(ctx: &GpuContext, scene: &Scene) -> Result<Self> {
         if scene.triangles.is_empty() {
@@ -44,6 +48,13 @@ impl GpuScene {
         Ok(Self {
             triangles: storage_buffer(ctx, "triangles", &scene.triangles)?,
             materials: storage_buffer(ctx, "materials", &scene.materials)?,
+            lights: if scene.lights.is_empty() {
+                storage_buffer_zeroed(ctx, "lights", std::mem::size_of::<PointLight>() as u64)?
+            } else {
+                storage_buffer(ctx, "lights", &scene.lights)?
+            },
+            light_count: u32::try_from(scene.lights.len())
+                .map_err(|_| Error::SceneTooLarge(format!("{} lights", scene.lights.len())))?,
             nodes: storage_buffer_zeroed(ctx, "bvh nodes", std::mem::size_of::<BvhNode>() as u64)?,
             prim_indices: storage_buffer_zeroed(ctx, "prim indices", 4)?,
             triangle_count,

@@ -66,8 +66,10 @@ struct TraceParams {
     max_depth: u32,
     sky: [f32; 3],
     samples: u32,
+    light_count: u32,
+    _pad: [u32; 3],
 }
-const _: () = assert!(std::mem::size_of::<TraceParams>() == 80);
+const _: () = assert!(std::mem::size_of::<TraceParams>() == 96);
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -159,7 +161,11 @@ impl PathTracer {
         samples: u32,
     ) -> Result<TraceStats> {
         let s = self.settings;
-        let rays_per_sample = u64::from(s.width) * u64::from(s.height) * u64::from(s.max_depth);
+        // Each path vertex traces its bounce ray and one shadow ray per light.
+        let rays_per_sample = u64::from(s.width)
+            * u64::from(s.height)
+            * u64::from(s.max_depth)
+            * (1 + u64::from(scene.light_count));
         let per_dispatch =
             (MAX_RAYS_PER_DISPATCH / rays_per_sample).clamp(1, u64::from(samples.max(1))) as u32;
         let layout = self.trace_pipeline.get_bind_group_layout(0);
@@ -174,6 +180,7 @@ impl PathTracer {
                 bind_entry(4, &scene.prim_indices),
                 bind_entry(5, &self.accum),
                 bind_entry(6, &self.counters),
+                bind_entry(7, &scene.lights),
             ],
         });
         let mut stats = TraceStats::default();
@@ -182,7 +189,7 @@ impl PathTracer {
         let mut remaining = samples;
         while remaining > 0 {
             let batch = remaining.min(per_dispatch);
-            let params = self.params(camera, sky, batch);
+            let params = self.params(camera, sky, scene.light_count, batch);
             ctx.queue
                 .write_buffer(&self.trace_params, 0, bytemuck::bytes_of(&params));
             let mut encoder = ctx.device.create_command_encoder(&Default::default());
@@ -220,7 +227,7 @@ impl PathTracer {
         Ok(stats)
     }
 
-    fn params(&self, camera: &Camera, sky: Vec3, samples: u32) -> TraceParams {
+    fn params(&self, camera: &Camera, sky: Vec3, light_count: u32, samples: u32) -> TraceParams {
         let s = self.settings;
         let forward = (camera.target - camera.eye).normalize();
         let right = forward.cross(camera.up).normalize();
@@ -238,6 +245,8 @@ impl PathTracer {
             max_depth: s.max_depth,
             sky: sky.to_array(),
             samples,
+            light_count,
+            _pad: [0; 3],
         }
     }
 

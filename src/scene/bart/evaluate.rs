@@ -9,7 +9,7 @@
 use super::parser::{parse_file, AnimationRange, MorphKey, Node, ParsedAff, Shape, View};
 use super::spline::Animation;
 use crate::geometry::Aabb;
-use crate::scene::{Camera, Material, Scene, Triangle};
+use crate::scene::{Camera, Material, PointLight, Scene, Triangle};
 use crate::Result;
 use glam::{Affine3A, DAffine3, DVec3, Vec3};
 use std::collections::HashMap;
@@ -76,6 +76,7 @@ pub struct BartScene {
     camera_animation: Option<usize>,
     range: AnimationRange,
     sky: Vec3,
+    lights: Vec<PointLight>,
 }
 
 impl BartScene {
@@ -134,6 +135,11 @@ impl BartScene {
     /// The background colour (`b`), used as the sky; white without one.
     pub fn sky(&self) -> Vec3 {
         self.sky
+    }
+
+    /// The static point lights (`l`).
+    pub fn lights(&self) -> &[PointLight] {
+        &self.lights
     }
 
     /// Writes the scene's triangles at time `t` into `out` (cleared first): always
@@ -197,6 +203,7 @@ impl BartScene {
             triangles,
             materials: self.materials.clone(),
             sky: self.sky,
+            lights: self.lights.clone(),
         }
     }
 
@@ -319,6 +326,7 @@ impl Flattener {
             view,
             range,
             background,
+            lights,
         } = parsed;
         let mut names: Vec<String> = animations.keys().cloned().collect();
         names.sort();
@@ -362,6 +370,7 @@ impl Flattener {
                 frames: 1,
             }),
             sky: background.unwrap_or(DEFAULT_SKY),
+            lights,
         }
     }
 

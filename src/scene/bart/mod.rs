@@ -23,12 +23,14 @@
 //!   across transform blocks and files; before the first one it is 0.75 grey;
 //! * `v` view (camera; animated by the key frames named `camera`: position from `transl`,
 //!   looking down the rotated −z axis with the rotated +y up), `a t0 t1 N` animation range, `b`
-//!   background colour (used as the sky).
+//!   background colour (used as the sky);
+//! * `l x y z [r g b]` static point lights (white without a colour), in world coordinates, lit
+//!   as BART's Whitted-style renderer does (see `PointLight`).
 //!
-//! Ignored (read, checked and dropped): lights `l`/`la`, ambient light `am`, spheres `s` (with a
-//! warning; none occurs in the BART scenes). Comments start with `#` or `%` and run to the end of
-//! the line. Unknown commands are errors (`Error::Aff`), as in BART's reader: their length is
-//! unknown, so skipping them would misread what follows.
+//! Ignored (read, checked and dropped): animated lights `la` and spheres `s` (each with a
+//! warning; neither occurs in the BART scenes), ambient light `am`. Comments start with `#` or `%`
+//! and run to the end of the line. Unknown commands are errors (`Error::Aff`), as in BART's
+//! reader: their length is unknown, so skipping them would misread what follows.
 //!
 //! Evaluation conventions: those of the reference frames in the shared scenes folder
 //! (`scenes/bart/<scene>/frames`), which `tests/bart.rs` matches to their print precision (about

@@ -13,7 +13,7 @@
 
 use super::spline::{axis_angle, Animation, Key, Spline};
 use crate::scene::sanitize::DEFAULT_ALBEDO;
-use crate::scene::Material;
+use crate::scene::{Material, PointLight};
 use crate::{Error, Result};
 use glam::{DAffine3, DVec3, Vec3};
 use std::collections::HashMap;
@@ -111,6 +111,8 @@ pub(super) struct ParsedAff {
     pub view: Option<View>,
     pub range: Option<AnimationRange>,
     pub background: Option<Vec3>,
+    /// Static point lights (`l`), in world coordinates.
+    pub lights: Vec<PointLight>,
 }
 
 /// Parses the AFF file at `path` and, recursively, the files it includes (relative to the
@@ -128,6 +130,7 @@ pub(super) fn parse_file(path: &Path) -> Result<ParsedAff> {
             view: None,
             range: None,
             background: None,
+            lights: Vec::new(),
         },
         material_ids: HashMap::new(),
         albedo: Vec3::splat(DEFAULT_ALBEDO),
@@ -543,14 +546,28 @@ impl State {
                     self.parsed.view = Some(view);
                     None
                 }
-                "l" | "la" => {
-                    if token.text == "la" {
-                        cur.word("a light name")?;
-                    }
+                "l" => {
+                    let position = cur.vec3("a light position coordinate")?;
+                    let intensity = if cur.peek_is_number() {
+                        cur.vec3("a light colour component")?
+                    } else {
+                        Vec3::ONE
+                    };
+                    self.parsed
+                        .lights
+                        .push(PointLight::new(position, intensity));
+                    None
+                }
+                "la" => {
+                    let name = cur.word("a light name")?;
                     cur.skip_numbers(3, "a light position coordinate")?;
                     if cur.peek_is_number() {
                         cur.skip_numbers(3, "a light colour component")?;
                     }
+                    log::warn!(
+                        "animated light '{}' ignored (only static `l` lights are supported)",
+                        name.text
+                    );
                     None
                 }
                 "b" => {
