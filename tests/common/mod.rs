@@ -219,6 +219,7 @@ pub fn scene_named(name: &str, triangles: Vec<Triangle>) -> treelet::scene::Scen
         materials: vec![treelet::scene::Material::diffuse(Vec3::splat(0.5))],
         camera: treelet::scene::Camera::framing(&bounds),
         sky: Vec3::ONE,
+        lights: Vec::new(),
     }
 }
 
