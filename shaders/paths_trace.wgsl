@@ -110,7 +110,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
                     let distance = length(to_light);
                     let cos_theta = dot(n, to_light) / max(distance, 1e-30);
                     if cos_theta > 0.0 {
-                        let shadow = trace_closest(origin, to_light / distance, 0.0, distance);
+                        let shadow = trace_any(origin, to_light / distance, 0.0, distance);
                         rays++;
                         overflows += shadow.overflow;
                         if shadow.hit.tri == MISS {

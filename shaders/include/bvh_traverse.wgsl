@@ -1,4 +1,5 @@
-// Closest-hit BVH traversal with a per-invocation stack (children tested together, nearer first).
+// BVH traversal with a per-invocation stack (children tested together, nearer first): closest hit
+// (`trace_closest`), or any hit (`trace_any`, for shadow rays: stops at the first leaf hit).
 // The including kernel declares the storage arrays `nodes`, `prim_indices` and `triangles`.
 #include "bvh_node.wgsl"
 #include "ray_triangle.wgsl"
@@ -25,6 +26,15 @@ struct TraceResult {
 }
 
 fn trace_closest(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32) -> TraceResult {
+    return traverse(origin, dir, t_min, t_max, false);
+}
+
+// Some hit in [t_min, t_max] (not necessarily the closest), or MISS.
+fn trace_any(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32) -> TraceResult {
+    return traverse(origin, dir, t_min, t_max, true);
+}
+
+fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, any_hit: bool) -> TraceResult {
     var best = Hit(t_max, MISS, 0.0, 0.0);
     var overflow = 0u;
     // Zero direction components become tiny ones so that 0 * inf never produces NaN.
@@ -50,6 +60,9 @@ fn trace_closest(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32) -> T
                 if h.w != 0.0 {
                     best = Hit(h.x, tri_index, h.y, h.z);
                 }
+            }
+            if any_hit && best.tri != MISS {
+                return TraceResult(best, overflow);
             }
         } else {
             let left = nodes[node.left_or_first];
