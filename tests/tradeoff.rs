@@ -36,6 +36,22 @@ fn assert_ranges(actual: &[BestRange], expected: &[(&str, f64, f64)]) {
 }
 
 #[test]
+fn effective_throughput_approaches_the_raw_one() {
+    let a = m("a", 10.0, 100.0);
+    // 1e6 rays at 100 Mrays/s take 10 ms: half the frame is the build.
+    assert!((effective_mrays(&a, 1e6) - 50.0).abs() < 1e-9);
+    assert!(effective_mrays(&a, 1e15) > 99.99);
+    assert_eq!(effective_mrays(&m("free", 0.0, 7.0), 0.0), 7.0);
+}
+
+#[test]
+fn unusable_or_empty_inputs_give_no_ranges() {
+    assert!(best_ranges(&[], 1.0, 2.0).is_empty());
+    assert!(best_ranges(&[m("zero", 1.0, 0.0)], 1.0, 2.0).is_empty());
+    assert!(best_ranges(&[m("a", 1.0, 1.0)], 2.0, 2.0).is_empty());
+}
+
+#[test]
 fn two_configurations_cross_where_frame_times_are_equal() {
     // 1 ms + R/100M = 21 ms + R/200M  ⇔  R = 0.02 s / (1/100M − 1/200M) = 4M rays.
     let ms = [m("fast", 1.0, 100.0), m("good", 21.0, 200.0)];
