@@ -3,13 +3,10 @@
 // tree in the node layout works (LBVH, or a TRBVH tree after collapse and compaction, leaves of
 // several primitives) given its parent links and the list of its leaves.
 //
-// The scheme and its memory ordering are those of bounds_refit.wgsl (Karras 2012 §4): one
-// invocation per leaf stores the leaf's box (union of its triangles) and climbs parent links; a
-// per-node atomic counter lets only the second arrival merge both children and go on. Boxes are
-// stored and loaded as atomics (`node_words`: 8 words per BvhNode) and storageBarriers order the
-// box stores before the counter increment (release) and the increment before the sibling's box
-// loads (acquire); every invocation of a workgroup steps the climb loop together (barriers need
-// uniform control flow). Child and leaf words are only read. Counters must start at zero.
+// One invocation per leaf stores the leaf's box (union of its triangles) and climbs parent links
+// with `climb` (bottom_up_climb.wgsl, shared with bounds_refit: atomics and storageBarriers order
+// the box stores and counter increments). Child and leaf words are only read. Counters must start
+// at zero.
 #include "bvh_node.wgsl"
 
 const WORKGROUP: u32 = 64u;
@@ -29,20 +26,13 @@ struct RefitParams {
 @group(0) @binding(5) var<storage, read_write> node_words: array<atomic<u32>>;
 @group(0) @binding(6) var<storage, read_write> arrivals: array<atomic<u32>>;
 
-var<workgroup> climbing: atomic<u32>;
-var<workgroup> any_climbing: u32;
-
 #include "node_words.wgsl"
+#include "bottom_up_climb.wgsl"
 
 @compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let j = gid.x + gid.y * params.row_pitch;
     var node = 0u;
-    var is_climbing = false;
-    if lid == 0u {
-        atomicStore(&climbing, 0u);
-    }
-    workgroupBarrier();
     if j < params.leaf_count {
         node = leaves[j];
         let first = atomicLoad(&node_words[node * 8u + 3u]);
@@ -55,42 +45,6 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
             hi = max(hi, max(t.v0, max(t.v1, t.v2)));
         }
         store_box(node, lo, hi);
-        is_climbing = node != 0u;
-        if is_climbing {
-            atomicAdd(&climbing, 1u);
-        }
     }
-    loop {
-        // Release: this node's box is stored before the parent's counter is incremented.
-        storageBarrier();
-        var parent = 0u;
-        if is_climbing {
-            parent = parents[node];
-            if atomicAdd(&arrivals[parent], 1u) == 0u {
-                // First arrival: the sibling's invocation will finish the parent.
-                is_climbing = false;
-                atomicSub(&climbing, 1u);
-            }
-        }
-        // Acquire: the sibling's box, stored before its increment, is visible now.
-        storageBarrier();
-        if is_climbing {
-            let w = parent * 8u;
-            let left = atomicLoad(&node_words[w + 3u]);
-            let right = atomicLoad(&node_words[w + 7u]);
-            store_box(parent, min(load_min(left), load_min(right)), max(load_max(left), load_max(right)));
-            node = parent;
-            if node == 0u {
-                is_climbing = false;
-                atomicSub(&climbing, 1u);
-            }
-        }
-        workgroupBarrier();
-        if lid == 0u {
-            any_climbing = atomicLoad(&climbing);
-        }
-        if workgroupUniformLoad(&any_climbing) == 0u {
-            break;
-        }
-    }
+    climb(node, j < params.leaf_count, lid);
 }

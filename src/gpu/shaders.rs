@@ -27,6 +27,10 @@ const INCLUDES: &[(&str, &str)] = &[
         include_str!("../../shaders/include/node_words.wgsl"),
     ),
     (
+        "bottom_up_climb.wgsl",
+        include_str!("../../shaders/include/bottom_up_climb.wgsl"),
+    ),
+    (
         "split_grid.wgsl",
         include_str!("../../shaders/include/split_grid.wgsl"),
     ),

@@ -1,0 +1,57 @@
+// The bottom-up climb of bounds_refit and nodes_refit (Karras 2012 §4): each invocation whose leaf
+// box is stored climbs parent links; a per-node atomic counter lets only the second arrival merge
+// both children's boxes and go on. WGSL atomics are relaxed, so boxes go through `node_words`
+// (node_words.wgsl) and storageBarriers order the box stores before the counter increment
+// (release) and the increment before the sibling's box loads (acquire). Barriers need uniform
+// control flow, so every invocation of a workgroup steps the loop together until all are done:
+// call `climb` from uniform control flow. The including kernel declares `parents: array<u32>` and
+// `arrivals: array<atomic<u32>>` (counters starting at zero) and includes node_words.wgsl.
+
+var<workgroup> climbing: atomic<u32>;
+var<workgroup> any_climbing: u32;
+
+// Climbs from `leaf` (whose box is stored) when `has_leaf`; `lid` is the local invocation index.
+fn climb(leaf: u32, has_leaf: bool, lid: u32) {
+    if lid == 0u {
+        atomicStore(&climbing, 0u);
+    }
+    workgroupBarrier();
+    var node = leaf;
+    var is_climbing = has_leaf && node != 0u;
+    if is_climbing {
+        atomicAdd(&climbing, 1u);
+    }
+    loop {
+        // Release: this node's box is stored before the parent's counter is incremented.
+        storageBarrier();
+        var parent = 0u;
+        if is_climbing {
+            parent = parents[node];
+            if atomicAdd(&arrivals[parent], 1u) == 0u {
+                // First arrival: the sibling's invocation will finish the parent.
+                is_climbing = false;
+                atomicSub(&climbing, 1u);
+            }
+        }
+        // Acquire: the sibling's box, stored before its increment, is visible now.
+        storageBarrier();
+        if is_climbing {
+            let w = parent * 8u;
+            let left = atomicLoad(&node_words[w + 3u]);
+            let right = atomicLoad(&node_words[w + 7u]);
+            store_box(parent, min(load_min(left), load_min(right)), max(load_max(left), load_max(right)));
+            node = parent;
+            if node == 0u {
+                is_climbing = false;
+                atomicSub(&climbing, 1u);
+            }
+        }
+        workgroupBarrier();
+        if lid == 0u {
+            any_climbing = atomicLoad(&climbing);
+        }
+        if workgroupUniformLoad(&any_climbing) == 0u {
+            break;
+        }
+    }
+}
