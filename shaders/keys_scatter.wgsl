@@ -13,46 +13,16 @@
 // earlier in its own run. Ranks follow (invocation, position) = element order, hence stable.
 // 9 KiB of workgroup memory; no subgroup operations.
 // Tiles are linear workgroup indices over a 1D or 2D grid: wid.x + wid.y * num_workgroups.x.
-// ITEMS, TILE, SortParams and digit_of must match keys_histogram.wgsl and src/sort/radix_sort.rs.
+// Tile geometry, parameters and digit counting are shared with keys_histogram.wgsl
+// (radix_digits.wgsl).
 
-const WORKGROUP: u32 = 256u;
-const ITEMS: u32 = 32u; // pairs per invocation, at most 255 (byte-wide counters)
-const TILE: u32 = 8192u; // WORKGROUP * ITEMS pairs per workgroup, below 2^16 (16-bit prefixes)
-
-struct SortParams {
-    n: u32,
-    num_tiles: u32,
-    shift: u32,
-    bits: u32,
-}
-
-@group(0) @binding(0) var<uniform> params: SortParams;
 @group(0) @binding(1) var<storage, read> keys_in: array<vec2<u32>>;
 @group(0) @binding(2) var<storage, read> values_in: array<u32>;
 @group(0) @binding(3) var<storage, read> offsets: array<u32>;
 @group(0) @binding(4) var<storage, read_write> keys_out: array<vec2<u32>>;
 @group(0) @binding(5) var<storage, read_write> values_out: array<u32>;
 
-// [w][invocation]: counts, then exclusive prefixes within the segment, of digits 2w (low 16 bits)
-// and 2w + 1 (high 16 bits).
-var<workgroup> prefix: array<u32, 2048>;
-// [w][segment]: sums, then exclusive prefixes, over the 32 segments of 8 invocations.
-var<workgroup> segments: array<u32, 256>;
-
-fn digit_of(key: vec2<u32>) -> u32 {
-    let word = select(key.x, key.y, params.shift >= 32u);
-    return (word >> (params.shift & 31u)) & ((1u << params.bits) - 1u);
-}
-
-// One in byte (d % 4) of component d / 4: adding it counts digit d in 16 byte-wide counters.
-fn one_hot(d: u32) -> vec4<u32> {
-    return select(vec4<u32>(0u), vec4<u32>(1u << ((d & 3u) * 8u)), vec4<u32>(d >> 2u) == vec4<u32>(0u, 1u, 2u, 3u));
-}
-
-// Bytes 0 and 1 of `f` to the two 16-bit halves.
-fn widen(f: u32) -> u32 {
-    return (f & 0xffu) | ((f & 0xff00u) << 8u);
-}
+#include "radix_digits.wgsl"
 
 // Component i of v, with selects (dynamic indexing is slow on some drivers).
 fn pick(v: vec4<u32>, i: u32) -> u32 {
@@ -62,7 +32,7 @@ fn pick(v: vec4<u32>, i: u32) -> u32 {
 // First output position of digit d for invocation lid's pairs.
 fn first_slot(d: u32, lid: u32, tile: u32) -> u32 {
     let w = d >> 1u;
-    let local = prefix[w * WORKGROUP + lid] + segments[w * 32u + lid / 8u];
+    let local = digit_counts[w * WORKGROUP + lid] + segments[w * 32u + lid / 8u];
     return offsets[d * params.num_tiles + tile] + ((local >> ((d & 1u) * 16u)) & 0xffffu);
 }
 
@@ -84,14 +54,7 @@ fn main(
             count += one_hot(digit_of(keys_in[item]));
         }
     }
-    prefix[lid] = widen(count.x);
-    prefix[WORKGROUP + lid] = widen(count.x >> 16u);
-    prefix[2u * WORKGROUP + lid] = widen(count.y);
-    prefix[3u * WORKGROUP + lid] = widen(count.y >> 16u);
-    prefix[4u * WORKGROUP + lid] = widen(count.z);
-    prefix[5u * WORKGROUP + lid] = widen(count.z >> 16u);
-    prefix[6u * WORKGROUP + lid] = widen(count.w);
-    prefix[7u * WORKGROUP + lid] = widen(count.w >> 16u);
+    store_digit_counts(count, lid);
     workgroupBarrier();
     // Invocation lid scans invocations [8s, 8s + 8) of word w (two digits at once: the halves
     // never carry, tile counts stay below 2^16).
@@ -100,8 +63,8 @@ fn main(
     var run = 0u;
     for (var j = 0u; j < 8u; j++) {
         let at = w * WORKGROUP + s * 8u + j;
-        let c = prefix[at];
-        prefix[at] = run;
+        let c = digit_counts[at];
+        digit_counts[at] = run;
         run += c;
     }
     segments[lid] = run;

@@ -27,6 +27,10 @@ const INCLUDES: &[(&str, &str)] = &[
         include_str!("../../shaders/include/node_words.wgsl"),
     ),
     (
+        "radix_digits.wgsl",
+        include_str!("../../shaders/include/radix_digits.wgsl"),
+    ),
+    (
         "bottom_up_climb.wgsl",
         include_str!("../../shaders/include/bottom_up_climb.wgsl"),
     ),
