@@ -21,6 +21,8 @@ struct TraceParams {
     sky: vec3<f32>,
     samples: u32,
     light_count: u32,
+    // Always 0 (see `opaque` in ray_triangle.wgsl).
+    opaque_zero: u32,
 }
 
 struct PointLight {
@@ -85,7 +87,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
             var throughput = vec3<f32>(1.0);
             var radiance = vec3<f32>(0.0);
             for (var depth = 0u; depth < params.max_depth; depth++) {
-                let traced = trace_closest(origin, dir, 0.0, 3.0e38);
+                let traced = trace_closest(origin, dir, 0.0, 3.0e38, params.opaque_zero);
                 rays++;
                 overflows += traced.overflow;
                 let hit = traced.hit;
@@ -110,7 +112,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
                     let distance = length(to_light);
                     let cos_theta = dot(n, to_light) / max(distance, 1e-30);
                     if cos_theta > 0.0 {
-                        let shadow = trace_any(origin, to_light / distance, 0.0, distance);
+                        let shadow = trace_any(origin, to_light / distance, 0.0, distance, params.opaque_zero);
                         rays++;
                         overflows += shadow.overflow;
                         if shadow.hit.tri == MISS {

@@ -1,12 +1,14 @@
-// Closest-hit queries: one invocation per ray, the hit through the BVH written per ray.
+// Ray queries: one invocation per ray, its closest hit (or any hit) through the BVH written per ray.
 // Used by tests (against CPU brute force) and by anyone who needs batched ray queries.
 #include "bvh_traverse.wgsl"
 
 struct QueryParams {
     ray_count: u32,
     row_pitch: u32,
-    pad0: u32,
-    pad1: u32,
+    // Always 0 (see `opaque` in ray_triangle.wgsl).
+    opaque_zero: u32,
+    // 1: any hit in the interval, 0: the closest hit.
+    any_hit: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: QueryParams;
@@ -25,7 +27,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let ray = rays[i];
-    let result = trace_closest(ray.origin, ray.dir, ray.t_min, ray.t_max);
+    let result = traverse(ray.origin, ray.dir, ray.t_min, ray.t_max, params.opaque_zero, params.any_hit != 0u);
     if result.overflow != 0u {
         atomicAdd(&counters[0], 1u);
     }

@@ -17,7 +17,8 @@
 //   5. if the optimal cost is lower than the current one, write the new topology back, reusing
 //      the treelet's internal nodes (root keeps its index), with boxes, N, C and parent links.
 // Node data is shared across workgroups, so all of it lives in atomics. The CPU twin is
-// bvh::treelet::optimize_treelets_cpu (same operation order, same tie-breaking).
+// `WorkingTree::optimize_round` (same operation order, same tie-breaking; costs agree to a few
+// ulps, as the GPU may fuse Ci·A into the following add).
 #include "bvh_node.wgsl"
 
 const WORKGROUP: u32 = 32u;
@@ -100,7 +101,9 @@ fn is_leaf(node: u32) -> bool {
 }
 
 // XOR with a zero the compiler cannot see keeps a product from being fused into a following add
-// (FMA contraction, which lavapipe does): every sum then rounds exactly as in the CPU twin.
+// (FMA contraction, which GPU compilers do and WGSL allows). Used for surface areas only: the
+// collapse (nodes_mark.wgsl) recomputes a node's area to find the leaves this kernel chose
+// (Ct·A·N == C), so both kernels must round it identically.
 fn unfused(x: f32) -> f32 {
     return bitcast<f32>(bitcast<u32>(x) ^ params.zero);
 }
@@ -116,7 +119,7 @@ fn get_cost(node: u32) -> f32 {
 
 // Cost of a node of area a and n primitives whose children cost `children` in total.
 fn combine_cost(a: f32, n: u32, children: f32) -> f32 {
-    var c = unfused(params.ci * a) + children;
+    var c = params.ci * a + children;
     if n <= params.max_leaf_size {
         c = min(c, params.ct * a * f32(n));
     }

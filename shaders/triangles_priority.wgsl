@@ -11,8 +11,8 @@
 struct SplitParams {
     count: u32,
     row_pitch: u32,
-    zero: u32,
-    pad: u32,
+    pad0: u32,
+    pad1: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: SplitParams;
@@ -43,9 +43,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         let d1 = t.v1 - t.v0;
         let d2 = t.v2 - t.v0;
         let c = vec3<f32>(
-            unfused(d1.y * d2.z) - unfused(d1.z * d2.y),
-            unfused(d1.z * d2.x) - unfused(d1.x * d2.z),
-            unfused(d1.x * d2.y) - unfused(d1.y * d2.x),
+            d1.y * d2.z - d1.z * d2.y,
+            d1.z * d2.x - d1.x * d2.z,
+            d1.x * d2.y - d1.y * d2.x,
         );
         let ideal = abs(c.x) + abs(c.y) + abs(c.z);
         let importance = i32(bit / 3u) - 20;

@@ -1,21 +1,24 @@
 // Pre-splitting step 3 (Karras & Aila 2013, §5): each triangle becomes its s_t + 1 references.
-// Pieces are split recursively at the coarsest Morton-grid plane crossing the piece box (see
+// Pieces are split recursively at the coarsest Morton-grid plane crossing the piece (see
 // `split_plane`; planes on the power-of-two subdivision of the scene's cubic grid, so neighbouring
-// triangles' splits agree). Only planes strictly inside the box count: a piece whose side was cut
-// at a plane must not be "split" there again, which would emit copies of the same box. Each side
-// is the box of the triangle clipped to the piece box on that side (Sutherland–Hodgman), and the
-// remaining pieces are shared by the two sides' extents. A piece that cannot be split (inside one
-// grid cell, or clipping leaves a side empty) is emitted as often as it still owes references, so
-// every triangle writes exactly its count. Writes the reference boxes and each reference's
-// triangle, at the triangle's scanned offset.
+// triangles' splits agree). A piece carries the grid cells it covers as integers: the side cut at
+// a plane ends exactly at that plane's cell, whatever the rounding of the plane's position and of
+// the grid scale (a float cell range would put a side that ends on the plane into the next cell on
+// some devices, and the piece would then be "split" at its own side again, emitting copies of one
+// box). Each side is the box of the triangle clipped to the piece box on that side
+// (Sutherland–Hodgman), and the remaining pieces are shared by the sides' extents in cells (integer
+// arithmetic, rounded half up). A piece that cannot be split (inside one grid cell, or clipping
+// leaves a side empty) is emitted as often as it still owes references, so every triangle writes
+// exactly its count. Writes the reference boxes and each reference's triangle, at the triangle's
+// scanned offset. CPU twin: `split_triangle`.
 #include "bvh_node.wgsl"
 #include "aabb.wgsl"
 
 struct SplitParams {
     count: u32,
     row_pitch: u32,
-    zero: u32,
-    pad: u32,
+    pad0: u32,
+    pad1: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: SplitParams;
@@ -37,7 +40,23 @@ const MAX_POLYGON: u32 = 9u;
 struct Piece {
     lo: vec3<f32>,
     hi: vec3<f32>,
+    first: vec3<u32>,
+    last: vec3<u32>,
     pieces: u32,
+}
+
+// The piece of box [lo, hi] within the cells [first, last] of its parent.
+fn piece_within(grid: SplitGrid, lo: vec3<f32>, hi: vec3<f32>, first: vec3<u32>, last: vec3<u32>, pieces: u32) -> Piece {
+    let cells = cell_range(grid, lo, hi);
+    let f = clamp(cells.first, first, last);
+    let l = clamp(cells.last, f, last);
+    return Piece(lo, hi, f, l, pieces);
+}
+
+// Extent in cells along the piece's longest axis.
+fn piece_cells(p: Piece) -> u32 {
+    let e = p.last - p.first + vec3<u32>(1u);
+    return max(e.x, max(e.y, e.z));
 }
 
 struct Clipped {
@@ -70,7 +89,7 @@ fn clip_triangle(t: Triangle, lo: vec3<f32>, hi: vec3<f32>) -> Clipped {
             }
             if a_in != b_in && m < MAX_POLYGON {
                 let s = (bound - a[axis]) / (b[axis] - a[axis]);
-                var p = a + vec3<f32>(unfused(s * (b.x - a.x)), unfused(s * (b.y - a.y)), unfused(s * (b.z - a.z)));
+                var p = a + vec3<f32>(s * (b.x - a.x), s * (b.y - a.y), s * (b.z - a.z));
                 p[axis] = bound;
                 next[m] = p;
                 m++;
@@ -96,36 +115,36 @@ const NO_AXIS: u32 = 3u;
 struct SplitPlane {
     // NO_AXIS when no grid plane crosses the piece.
     axis: u32,
+    // Cells below `cell` lie left of the plane.
+    cell: u32,
     position: f32,
 }
 
-// The split plane of a piece box: on each axis, the grid plane of the highest bit in which the
-// first and last overlapped cells differ (the coarsest Morton-grid plane crossing the box on that
-// axis); of the planes strictly inside the box, the one of the highest level, ties in Morton bit
-// order (x, y, z).
-fn split_plane(grid: SplitGrid, lo: vec3<f32>, hi: vec3<f32>) -> SplitPlane {
-    let cells = cell_range(grid, lo, hi);
-    var best = SplitPlane(NO_AXIS, 0.0);
+// The split plane of a piece, skipping the axes in `tried` (a bit mask): on each axis, the grid
+// plane of the highest bit in which the first and last covered cells differ (the coarsest
+// Morton-grid plane crossing the piece on that axis); of the planes inside the piece box by more
+// than a cell on both sides, the one of the highest level, ties in Morton bit order (x, y, z). A
+// side thinner than a cell is not worth a reference, and the margin keeps the choice from turning
+// on rounding: the grid's 2^21 cells per axis are near the precision of the coordinates, so a
+// piece that ends on a plane (mathematically) may end a fraction of a cell beyond it.
+fn split_plane(grid: SplitGrid, p: Piece, tried: u32) -> SplitPlane {
+    var best = SplitPlane(NO_AXIS, 0u, 0.0);
     var best_level = 0u;
     for (var axis = 0u; axis < 3u; axis++) {
-        let differing = cells.first[axis] ^ cells.last[axis];
-        if differing == 0u {
+        let differing = p.first[axis] ^ p.last[axis];
+        if differing == 0u || (tried & (1u << axis)) != 0u {
             continue;
         }
         let level = 31u - countLeadingZeros(differing);
-        let position = grid.scene_min[axis] + unfused(f32((cells.last[axis] >> level) << level) * grid.cell);
-        let inside = lo[axis] < position && position < hi[axis];
+        let cell = (p.last[axis] >> level) << level;
+        let position = grid.scene_min[axis] + f32(cell) * grid.cell;
+        let inside = p.lo[axis] < position - grid.cell && position + grid.cell < p.hi[axis];
         if inside && (best.axis == NO_AXIS || level > best_level) {
-            best = SplitPlane(axis, position);
+            best = SplitPlane(axis, cell, position);
             best_level = level;
         }
     }
     return best;
-}
-
-fn max_extent(lo: vec3<f32>, hi: vec3<f32>) -> f32 {
-    let e = hi - lo;
-    return max(e.x, max(e.y, e.z));
 }
 
 @compute @workgroup_size(64)
@@ -141,38 +160,52 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         end = ref_offsets[i + 1u];
     }
     let grid = split_grid();
+    let lo = min(t.v0, min(t.v1, t.v2));
+    let hi = max(t.v0, max(t.v1, t.v2));
+    let cells = cell_range(grid, lo, hi);
     var stack: array<Piece, MAX_PIECES>;
-    stack[0] = Piece(min(t.v0, min(t.v1, t.v2)), max(t.v0, max(t.v1, t.v2)), end - out);
+    stack[0] = piece_within(grid, lo, hi, cells.first, cells.last, end - out);
     var sp = 1u;
     while sp > 0u {
         sp--;
         let piece = stack[sp];
-        var split = piece.pieces > 1u && sp + 2u <= MAX_PIECES;
+        // A plane whose cut leaves one side empty (the piece only grazes it, by rounding) gives
+        // way to the next candidate.
+        var split = false;
+        var tried = select(7u, 0u, piece.pieces > 1u && sp + 2u <= MAX_PIECES);
+        var plane = SplitPlane(NO_AXIS, 0u, 0.0);
         var left = Clipped(piece.lo, piece.hi, false);
         var right = left;
-        if split {
-            let plane = split_plane(grid, piece.lo, piece.hi);
-            split = plane.axis != NO_AXIS;
-            if split {
-                var left_hi = piece.hi;
-                left_hi[plane.axis] = plane.position;
-                var right_lo = piece.lo;
-                right_lo[plane.axis] = plane.position;
-                left = clip_triangle(t, piece.lo, left_hi);
-                right = clip_triangle(t, right_lo, piece.hi);
-                split = !left.empty && !right.empty;
+        while !split {
+            plane = split_plane(grid, piece, tried);
+            if plane.axis == NO_AXIS {
+                break;
             }
+            tried |= 1u << plane.axis;
+            var left_hi = piece.hi;
+            left_hi[plane.axis] = plane.position;
+            var right_lo = piece.lo;
+            right_lo[plane.axis] = plane.position;
+            left = clip_triangle(t, piece.lo, left_hi);
+            right = clip_triangle(t, right_lo, piece.hi);
+            split = !left.empty && !right.empty;
         }
         if split {
-            let wl = max_extent(left.lo, left.hi);
-            let wr = max_extent(right.lo, right.hi);
-            var share = 0.5;
-            if wl + wr > 0.0 {
-                share = wl / (wl + wr);
-            }
-            let nl = clamp(u32(round(f32(piece.pieces) * share)), 1u, piece.pieces - 1u);
-            stack[sp] = Piece(right.lo, right.hi, piece.pieces - nl);
-            stack[sp + 1u] = Piece(left.lo, left.hi, nl);
+            var below = piece.last;
+            below[plane.axis] = plane.cell - 1u;
+            var above = piece.first;
+            above[plane.axis] = plane.cell;
+            var l = piece_within(grid, left.lo, left.hi, piece.first, below, 0u);
+            var r = piece_within(grid, right.lo, right.hi, above, piece.last, 0u);
+            // Shared by extent in cells, rounded half up.
+            let n = piece.pieces;
+            let wl = piece_cells(l);
+            let wr = piece_cells(r);
+            let nl = clamp((2u * n * wl + wl + wr) / (2u * (wl + wr)), 1u, n - 1u);
+            l.pieces = nl;
+            r.pieces = n - nl;
+            stack[sp] = r;
+            stack[sp + 1u] = l;
             sp += 2u;
         } else {
             for (var k = 0u; k < piece.pieces && out < end; k++) {

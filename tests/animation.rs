@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::{assert_clean_failure, gpu, run_treelet};
+use common::{assert_clean_failure, gpu, missing_shared_scene, run_treelet};
 use treelet::anim::{
     load_animation, Animation, Explosion, Flag, RigidBodies, TreeUpdater, UpdateMode,
 };
@@ -203,7 +203,7 @@ fn bart_kitchen_through_the_animation_path_equals_evaluate() {
         .map(|d| d.join("bart/kitchen/aff/kitchen.aff"))
         .filter(|p| p.is_file())
     else {
-        eprintln!("skipping: the shared BART kitchen is not there");
+        missing_shared_scene("the shared BART kitchen (bart/kitchen/aff/kitchen.aff)");
         return;
     };
     let reference = BartScene::load(&path).unwrap();

@@ -3,6 +3,9 @@
 //! malformed files (each an `Error::Aff` with the right line), and the three BART scenes of the
 //! shared scenes folder against the reference frames evaluated there.
 
+mod common;
+
+use common::missing_shared_scene;
 use glam::{Quat, Vec3};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -576,14 +579,13 @@ fn read_reference_frame(path: &Path) -> (f32, Vec<[Vec3; 3]>) {
 /// frame and sanity-checks the whole animation; returns the scene (or `None` when the shared
 /// folder is missing).
 fn check_against_reference(scene: &str, entry: &str, frames: &[u32]) -> Option<BartScene> {
-    let dir = shared_scenes_dir()
-        .unwrap_or_else(|| PathBuf::from("/work/shared/scenes"))
-        .join("bart")
-        .join(scene);
-    if !dir.is_dir() {
-        println!("skipping: {} is missing", dir.display());
+    let Some(dir) = shared_scenes_dir()
+        .map(|d| d.join("bart").join(scene))
+        .filter(|d| d.is_dir())
+    else {
+        missing_shared_scene(format!("the shared BART scene bart/{scene}"));
         return None;
-    }
+    };
     let start = Instant::now();
     let bart = BartScene::load(&dir.join("aff").join(entry)).unwrap_or_else(|e| panic!("{e}"));
     println!(

@@ -65,10 +65,27 @@ fn render_writes_a_png() {
     std::fs::remove_file(&out).ok();
 }
 
+/// `bench` prints one JSON line per builder, GPU builders first, each with the min/median/max of
+/// its timed builds and traces and the warm-up it had.
 #[test]
 fn bench_prints_json_lines() {
     let result = treelet(&[
-        "bench", "--scene", "cornell", "--json", "--width", "32", "--height", "32", "--spp", "1",
+        "bench",
+        "--scene",
+        "cornell",
+        "--builder",
+        "sweep,lbvh",
+        "--json",
+        "--width",
+        "32",
+        "--height",
+        "32",
+        "--spp",
+        "1",
+        "--repeats",
+        "3",
+        "--warmup-ms",
+        "50",
     ]);
     assert!(
         result.status.success(),
@@ -76,23 +93,169 @@ fn bench_prints_json_lines() {
         String::from_utf8_lossy(&result.stderr)
     );
     let stdout = String::from_utf8(result.stdout).unwrap();
-    let record: serde_json::Value = serde_json::from_str(stdout.lines().next().unwrap()).unwrap();
-    for key in [
-        "scene",
-        "builder",
-        "triangles",
-        "nodes",
-        "leaves",
-        "build_ms",
-        "sah",
-        "rays",
-        "trace_ms",
-        "mrays_per_s",
-        "valid",
-    ] {
-        assert!(record.get(key).is_some(), "missing {key} in {record}");
+    let records: Vec<serde_json::Value> = stdout
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let builders: Vec<&str> = records
+        .iter()
+        .map(|r| r["builder"].as_str().unwrap())
+        .collect();
+    assert_eq!(builders, ["lbvh", "sweep"], "GPU builders run first");
+    for record in &records {
+        for key in [
+            "scene",
+            "builder",
+            "triangles",
+            "nodes",
+            "leaves",
+            "build_ms",
+            "sah",
+            "rays",
+            "trace_ms",
+            "mrays_per_s",
+            "valid",
+        ] {
+            assert!(record.get(key).is_some(), "missing {key} in {record}");
+        }
+        assert_eq!(record["valid"], true);
+        assert_eq!(record["triangles"], 36);
+        assert_eq!(record["repeats"], 3);
+        assert_eq!(record["warmup_ms"], 50.0);
+        assert!(record["rays"].as_u64().unwrap() >= 32 * 32);
+        let spread = |key: &str| {
+            let s = &record[key];
+            let v = |k: &str| {
+                s[k].as_f64()
+                    .unwrap_or_else(|| panic!("{key}.{k} in {record}"))
+            };
+            (v("min"), v("median"), v("max"))
+        };
+        let (min, median, max) = spread("build_ms_spread");
+        assert!(min <= median && median <= max, "{record}");
+        assert_eq!(median, record["build_ms"].as_f64().unwrap());
+        if record["mrays_per_s"].is_f64() {
+            let (min, median, max) = spread("mrays_per_s_spread");
+            assert!(min <= median && median <= max, "{record}");
+        }
+        let trace_warmup = &record["trace_warmup"];
+        assert!(trace_warmup["runs"].as_u64().unwrap() >= 1, "{record}");
+        assert!(trace_warmup["ms"].as_f64().unwrap() >= 50.0, "{record}");
     }
-    assert_eq!(record["valid"], true);
-    assert_eq!(record["triangles"], 36);
-    assert!(record["rays"].as_u64().unwrap() >= 32 * 32);
+    let gpu_warmup = &records[0]["build_warmup"];
+    assert!(gpu_warmup["ms"].as_f64().unwrap() >= 50.0, "{gpu_warmup}");
+}
+
+/// A fresh temporary path named `stem` with `extension`.
+fn temp_path(stem: &str, extension: &str) -> std::path::PathBuf {
+    std::env::temp_dir().join(format!(
+        "treelet-cli-{stem}-{}.{extension}",
+        std::process::id()
+    ))
+}
+
+#[test]
+fn an_aff_file_given_by_path_renders() {
+    let aff = temp_path("scene", "aff");
+    std::fs::write(
+        &aff,
+        "v\nfrom 0 0 3\nat 0 0 0\nup 0 1 0\nangle 45\nhither 0.01\nresolution 32 24\n\
+         f 0.8 0.5 0.2 1 0 0 0 1\n\
+         p 4\n -1 -1 0\n 1 -1 0\n 1 1 0\n -1 1 0\n",
+    )
+    .unwrap();
+    let out = temp_path("aff-render", "png");
+    let args = ["--width", "16", "--height", "12", "--spp", "1"];
+    for command in ["render", "bench"] {
+        let mut full = vec![command, "--scene", aff.to_str().unwrap()];
+        full.extend(args);
+        if command == "render" {
+            full.extend(["--out", out.to_str().unwrap()]);
+        } else {
+            full.extend(["--repeats", "1", "--warmup-ms", "0"]);
+        }
+        let result = treelet(&full);
+        assert!(
+            result.status.success(),
+            "{command}: {}",
+            String::from_utf8_lossy(&result.stderr)
+        );
+    }
+    assert!(image::open(&out).is_ok());
+    std::fs::remove_file(&out).ok();
+    std::fs::remove_file(&aff).ok();
+    assert_clean_failure(
+        &["render", "--scene", "/no/such/scene.aff"],
+        "/no/such/scene.aff",
+    );
+}
+
+#[test]
+fn writing_into_a_missing_folder_says_cannot_write() {
+    assert_clean_failure(
+        &[
+            "render",
+            "--out",
+            "/nonexistent/dir/x.png",
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "--spp",
+            "1",
+        ],
+        "cannot write /nonexistent/dir/x.png",
+    );
+}
+
+#[test]
+fn overflowing_triangles_are_reported_as_such() {
+    let obj = temp_path("overflow", "obj");
+    std::fs::write(
+        &obj,
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv -3e38 0 0\nv 3e38 0 0\nv 0 3e38 0\nf 1 2 3\nf 4 5 6\n",
+    )
+    .unwrap();
+    let out = temp_path("overflow", "png");
+    let result = treelet(&[
+        "render",
+        "--scene",
+        obj.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--spp",
+        "1",
+    ]);
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(result.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("0 triangle(s) with non-finite coordinates, 1 with coordinates so large"),
+        "{stderr}"
+    );
+    std::fs::remove_file(&obj).ok();
+    std::fs::remove_file(&out).ok();
+}
+
+#[test]
+fn options_of_other_builders_are_refused() {
+    assert_clean_failure(
+        &["render", "--builder", "sweep", "--treelet-size", "99"],
+        "--treelet-size does not apply to builder sweep",
+    );
+    assert_clean_failure(
+        &["bench", "--builder", "lbvh,sbvh", "--rounds", "2"],
+        "--rounds does not apply to builder lbvh, sbvh",
+    );
+    assert_clean_failure(
+        &["render", "--builder", "lbvh", "--preset", "fast"],
+        "--preset does not apply",
+    );
+    assert_clean_failure(
+        &["bench", "--builder", "trbvh", "--split-budget", "0.3"],
+        "--split-budget does not apply to builder trbvh",
+    );
 }

@@ -5,7 +5,10 @@
 
 mod common;
 
-use common::{assert_hits_match, gpu, random_soup, scene_named, test_rays};
+use common::{
+    assert_cpu_traversal_matches, assert_hits_match, gpu, missing_shared_scene, random_soup,
+    scene_named, test_rays,
+};
 use glam::Vec3;
 use treelet::bvh::{
     build_sbvh, build_sweep_sah, sah_cost, validate_with_references, Bvh, SahParams,
@@ -64,10 +67,11 @@ fn check_scene(scene: &Scene, per_kind: usize, seed: u64) -> Bvh {
     let rays = test_rays(&scene.triangles, per_kind, seed);
     let plain: Vec<_> = rays.iter().map(|(_, r)| *r).collect();
     let hits = closest_hits(gpu(), &gpu_scene, &plain).unwrap();
-    let tolerated = assert_hits_match(&scene.triangles, &rays, &hits);
+    let ties = assert_hits_match(&scene.triangles, &rays, &hits);
+    assert_cpu_traversal_matches(&bvh, &scene.triangles, &rays);
     println!(
         "{}: {} triangles, {} references, {} nodes, depth {}, SAH {:.3}, built in {ms:.1} ms; \
-         {} rays, {tolerated} tolerated edge disagreements",
+         {} rays, {ties} hit an equally close neighbour",
         scene.name,
         scene.triangles.len(),
         bvh.prim_indices.len(),
@@ -135,6 +139,6 @@ fn shared_buddha_is_valid_and_traced_exactly() {
         Ok(scene) => {
             check_scene(&scene, 300, 4);
         }
-        Err(e) => println!("skipping: shared scenes not available ({e})"),
+        Err(e) => missing_shared_scene(e),
     }
 }

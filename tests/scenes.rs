@@ -3,6 +3,9 @@
 //! path, and bad input (missing, malformed, empty, non-finite, degenerate files, unknown names)
 //! gives the documented error or policy, never a panic.
 
+mod common;
+
+use common::missing_shared_scene;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use treelet::scene::{builtin_names, load_obj, load_scene, shared_scenes_dir, Scene, SCENES};
@@ -28,15 +31,13 @@ fn load_text(stem: &str, text: &str) -> (PathBuf, treelet::Result<Scene>) {
     (path, result)
 }
 
-/// Whether the shared scene folder with `relative` in it is present; prints why a test is skipped.
+/// Whether the shared scene file `relative` is present (see `missing_shared_scene` otherwise).
 fn shared_available(relative: &str) -> bool {
-    match shared_scenes_dir() {
-        Some(dir) if dir.join(relative).is_file() => true,
-        _ => {
-            eprintln!("skipping: shared scene {relative} not found (set TREELET_SCENES_DIR)");
-            false
-        }
+    let present = shared_scenes_dir().is_some_and(|dir| dir.join(relative).is_file());
+    if !present {
+        missing_shared_scene(format!("shared scene {relative}"));
     }
+    present
 }
 
 fn assert_sane(scene: &Scene) {
@@ -152,15 +153,11 @@ fn loads_by_path() {
 
 #[test]
 fn shared_scene_loads_by_path() {
-    let Some(dir) = shared_scenes_dir() else {
-        eprintln!("skipping: no shared scenes folder");
-        return;
-    };
-    let path = dir.join("cornell_box/CornellBox-Original.obj");
-    if !path.is_file() {
-        eprintln!("skipping: {} not found", path.display());
+    let relative = "cornell_box/CornellBox-Original.obj";
+    if !shared_available(relative) {
         return;
     }
+    let path = shared_scenes_dir().expect("checked above").join(relative);
     let scene = load_scene(path.to_str().expect("UTF-8 path")).expect("loads by path");
     assert_eq!(scene.triangles.len(), 36);
 }

@@ -1,19 +1,20 @@
 //! Treelet restructuring (Karras & Aila 2013): the DP is optimal (against brute force over all
-//! binary topologies, CPU and GPU), the GPU optimizer equals its CPU twin exactly, SAH never gets
-//! worse than the input LBVH, every tree is valid, traced hits equal brute force, and repeated
-//! builds are identical.
+//! binary topologies, CPU and GPU), the GPU optimizer agrees with its CPU twin run on the GPU's
+//! own LBVH (within stated tolerances: see `assert_optimizer_agrees`), the collapse equals its
+//! CPU twin exactly, SAH never gets worse than the input LBVH, every tree is valid, traced hits
+//! equal brute force, and repeated builds are identical.
 
 mod common;
 
 use common::{assert_hits_match, gpu, random_soup, rng, scene_of, test_rays};
 use glam::Vec3;
 use rand::Rng;
-use treelet::bvh::lbvh::build_lbvh_cpu;
+use treelet::bvh::lbvh::{build_lbvh_from_boxes_cpu, prim_boxes_cpu};
 use treelet::bvh::treelet::{
-    build_trbvh_cpu, optimize_cpu, solve_treelet, surface_area, CostModel, TrbvhBuilder,
-    TreeletLeaf, TreeletSettings,
+    build_trbvh_cpu, optimize_lbvh_cpu, solve_treelet, surface_area, CostModel, TrbvhBuilder,
+    TreeletLeaf, TreeletSettings, WorkingTree,
 };
-use treelet::bvh::{sah_cost, validate, SahParams};
+use treelet::bvh::{sah_cost, validate, Bvh, SahParams};
 use treelet::scene::{load_scene, Triangle};
 use treelet::trace::{closest_hits, GpuScene};
 
@@ -79,11 +80,10 @@ fn close(a: f32, b: f32) -> bool {
 #[test]
 fn dp_equals_brute_force_on_cpu() {
     for max_leaf_size in [1, 8] {
-        let model = CostModel {
-            ci: 1.2,
-            ct: 1.0,
+        let model = CostModel::from(&SahParams {
             max_leaf_size,
-        };
+            ..SahParams::default()
+        });
         for m in [5usize, 6, 7] {
             for seed in 0..20 {
                 let leaves = random_leaves(m, seed * 31 + m as u64, &model);
@@ -109,11 +109,10 @@ fn dp_equals_brute_force_on_gpu() {
     let sah = SahParams::default();
     let mut builder = TrbvhBuilder::new(gpu(), TreeletSettings::BALANCED, sah).unwrap();
     for max_leaf_size in [1, 8] {
-        let model = CostModel {
-            ci: sah.ci,
-            ct: sah.ct,
+        let model = CostModel::from(&SahParams {
             max_leaf_size,
-        };
+            ..sah
+        });
         for m in [5u32, 6, 7] {
             for seed in 0..4 {
                 let tris = random_soup(m as usize, 100 + seed * 7 + u64::from(m));
@@ -154,15 +153,155 @@ fn dp_equals_brute_force_on_gpu() {
     }
 }
 
-fn check_gpu_equals_cpu(
+/// Relative tolerance on node costs between the GPU and the CPU twin: the kernel's sums of
+/// products may be fused (FMA) where the CPU rounds each product, a few ulps.
+const COST_TOLERANCE: f32 = 1e-5;
+
+fn within(a: f32, b: f32, tolerance: f32) -> bool {
+    (a - b).abs() <= tolerance * a.abs().max(b.abs()).max(1e-30)
+}
+
+/// A node's primitive set, as its count and two order-independent hashes of its primitive ids.
+type PrimSet = (u32, u64, u64);
+
+fn prim_sets(tree: &WorkingTree, order: &[usize]) -> Vec<PrimSet> {
+    let mut sets = vec![(0, 0, 0); tree.nodes.len()];
+    for &i in order {
+        let n = tree.nodes[i];
+        sets[i] = if n.is_leaf() {
+            let p = u64::from(tree.prims[n.left_or_first as usize]);
+            (
+                1,
+                p.wrapping_mul(0x9e37_79b9_7f4a_7c15),
+                p ^ (p << 29) ^ 0x5851_f42d,
+            )
+        } else {
+            let (l, r) = (
+                sets[n.left_or_first as usize],
+                sets[n.right_or_count as usize],
+            );
+            (l.0 + r.0, l.1.wrapping_add(r.1), l.2 ^ r.2)
+        };
+    }
+    sets
+}
+
+/// Children before parents (post-order from the root); every node once.
+fn bottom_up(tree: &WorkingTree) -> Vec<usize> {
+    let mut order = Vec::with_capacity(tree.nodes.len());
+    let mut stack = vec![(0usize, false)];
+    while let Some((i, expanded)) = stack.pop() {
+        let n = tree.nodes[i];
+        if n.is_leaf() || expanded {
+            order.push(i);
+        } else {
+            let (l, r) = n.children();
+            stack.extend([(i, true), (r as usize, false), (l as usize, false)]);
+        }
+    }
+    assert_eq!(
+        order.len(),
+        tree.nodes.len(),
+        "the tree does not reach every node once"
+    );
+    order
+}
+
+/// Checks the GPU's working tree after the rounds:
+/// - on its own: parent links match child links and primitive counts are subtree sizes
+///   (exactly), every box is the union of its children's (exactly: min/max), and every cost is
+///   the SAH cost of the node over its children (within `COST_TOLERANCE`);
+/// - against the CPU twin run from the GPU's own LBVH: wherever a node holds the same primitives
+///   in both trees, its costs agree within `COST_TOLERANCE` — topology may differ only where the
+///   alternatives cost the same within rounding (a device that fuses Ci·A into the following add
+///   breaks such ties its own way); and the collapsed trees' SAH agree within 0.5 %.
+///
+/// Returns the fraction of internal nodes whose primitive sets match.
+fn assert_optimizer_agrees(gpu: &WorkingTree, cpu: &WorkingTree, sah: &SahParams) -> f64 {
+    let model = &CostModel::from(sah);
+    let area = |t: &WorkingTree, i: usize| {
+        surface_area(Vec3::from(t.nodes[i].min), Vec3::from(t.nodes[i].max))
+    };
+    let order = bottom_up(gpu);
+    for &i in &order {
+        let g = gpu.nodes[i];
+        if g.is_leaf() {
+            assert_eq!(gpu.prim_counts[i], 1, "leaf {i}: primitive count");
+            assert!(
+                within(gpu.costs[i], model.ct * area(gpu, i), COST_TOLERANCE),
+                "leaf {i}: cost {} vs Ct·A {}",
+                gpu.costs[i],
+                model.ct * area(gpu, i)
+            );
+            continue;
+        }
+        let (l, r) = g.children();
+        let (l, r) = (l as usize, r as usize);
+        assert_eq!(
+            (gpu.parents[l], gpu.parents[r]),
+            (i as u32, i as u32),
+            "node {i}: parents"
+        );
+        let prims = gpu.prim_counts[l] + gpu.prim_counts[r];
+        assert_eq!(gpu.prim_counts[i], prims, "node {i}: primitive count");
+        let union = gpu.nodes[l].bounds().union(gpu.nodes[r].bounds());
+        assert_eq!(
+            g.bounds(),
+            union,
+            "node {i}: box is not the union of its children's"
+        );
+        let expected = model.combine(area(gpu, i), prims, gpu.costs[l] + gpu.costs[r]);
+        assert!(
+            within(gpu.costs[i], expected, COST_TOLERANCE),
+            "node {i}: cost {} vs {expected} from its children",
+            gpu.costs[i]
+        );
+    }
+    let (gpu_sets, cpu_sets) = (prim_sets(gpu, &order), prim_sets(cpu, &bottom_up(cpu)));
+    let mut matching = 0;
+    let internal = gpu.nodes.iter().filter(|n| !n.is_leaf()).count();
+    for i in 0..gpu.nodes.len() {
+        if gpu_sets[i] != cpu_sets[i] {
+            continue;
+        }
+        if !gpu.nodes[i].is_leaf() {
+            matching += 1;
+        }
+        assert_eq!(
+            gpu.nodes[i].bounds(),
+            cpu.nodes[i].bounds(),
+            "node {i}: box"
+        );
+        assert!(
+            within(gpu.costs[i], cpu.costs[i], COST_TOLERANCE),
+            "node {i} ({} primitives): cost {} vs CPU {}",
+            gpu.prim_counts[i],
+            gpu.costs[i],
+            cpu.costs[i]
+        );
+    }
+    let cost = |t: &WorkingTree| sah_cost(&t.collapse(model, None), sah);
+    let (got, want) = (cost(gpu), cost(cpu));
+    assert!(
+        (got - want).abs() <= 0.005 * want,
+        "SAH {got} vs CPU twin {want}"
+    );
+    matching as f64 / internal.max(1) as f64
+}
+
+fn check_gpu_against_cpu(
     builder: &mut TrbvhBuilder,
     triangles: Vec<Triangle>,
     settings: TreeletSettings,
 ) {
-    check_gpu_equals_cpu_with(builder, triangles, settings, SahParams::default());
+    check_gpu_against_cpu_with(builder, triangles, settings, SahParams::default());
 }
 
-fn check_gpu_equals_cpu_with(
+/// The GPU treelet rounds against the CPU twin from the GPU's own LBVH
+/// (`assert_optimizer_agrees`); the GPU collapse equals the CPU collapse of the GPU's working
+/// tree exactly (its decisions compare Ct·A·N with the stored costs, and the area is computed
+/// unfused, as in the treelet kernel); the tree is valid.
+fn check_gpu_against_cpu_with(
     builder: &mut TrbvhBuilder,
     triangles: Vec<Triangle>,
     settings: TreeletSettings,
@@ -173,19 +312,19 @@ fn check_gpu_equals_cpu_with(
     let mut gpu_scene = GpuScene::upload_geometry(gpu(), &scene).unwrap();
     builder.settings = settings;
     let stages = builder.build_stages(gpu(), &mut gpu_scene).unwrap();
-    let cpu = optimize_cpu(&scene.triangles, &settings, &sah);
-    let w = &stages.working;
-    assert_eq!(
-        bytemuck::cast_slice::<_, u8>(&w.nodes),
-        bytemuck::cast_slice::<_, u8>(&cpu.nodes),
-        "working nodes (topology and bounds)"
+    let model = CostModel::from(&sah);
+    let cpu = optimize_lbvh_cpu(stages.lbvh.clone(), &settings, &model);
+    let fraction = assert_optimizer_agrees(&stages.working, &cpu, &sah);
+    println!(
+        "{} triangles, {settings:?}: {:.2} % of internal nodes hold the CPU twin's primitives",
+        scene.triangles.len(),
+        fraction * 100.0
     );
-    assert_eq!(w.parents[1..], cpu.parents[1..], "parent links");
-    assert_eq!(w.prim_counts, cpu.prim_counts, "primitive counts");
-    let bits = |v: &[f32]| v.iter().map(|c| c.to_bits()).collect::<Vec<_>>();
-    assert_eq!(bits(&w.costs), bits(&cpu.costs), "costs");
-    let expected = build_trbvh_cpu(&scene.triangles, &settings, &sah);
-    assert_eq!(stages.bvh, expected, "collapsed tree");
+    assert_eq!(
+        stages.bvh,
+        stages.working.collapse(&model, None),
+        "collapsed tree"
+    );
     validate(&stages.bvh, &scene.triangles).expect("valid TRBVH");
 }
 
@@ -193,23 +332,23 @@ fn check_gpu_equals_cpu_with(
 fn gpu_optimizer_equals_cpu_twin() {
     let builder =
         &mut TrbvhBuilder::new(gpu(), TreeletSettings::BALANCED, SahParams::default()).unwrap();
-    check_gpu_equals_cpu(builder, random_soup(3000, 41), TreeletSettings::BALANCED);
-    check_gpu_equals_cpu(
+    check_gpu_against_cpu(builder, random_soup(3000, 41), TreeletSettings::BALANCED);
+    check_gpu_against_cpu(
         builder,
         load_scene("cornell").unwrap().triangles,
         TreeletSettings::BALANCED,
     );
-    check_gpu_equals_cpu(
+    check_gpu_against_cpu(
         builder,
         load_scene("field-10k").unwrap().triangles,
         TreeletSettings::FAST,
     );
-    check_gpu_equals_cpu(
+    check_gpu_against_cpu(
         builder,
         random_soup(2000, 42),
         TreeletSettings::HIGH_QUALITY,
     );
-    check_gpu_equals_cpu_with(
+    check_gpu_against_cpu_with(
         builder,
         random_soup(1500, 43),
         TreeletSettings {
@@ -224,15 +363,48 @@ fn gpu_optimizer_equals_cpu_twin() {
     );
 }
 
+/// The agreement checks hold for a device that fuses every Ci·A + children (as GPU compilers may):
+/// the CPU twin with fused arithmetic against the plain one, from the same LBVH.
+#[test]
+fn a_fusing_device_passes_the_agreement_checks() {
+    let sah = SahParams::default();
+    for (name, triangles) in [
+        ("soup", random_soup(20_000, 43)),
+        ("cornell", load_scene("cornell").unwrap().triangles),
+        ("field-10k", load_scene("field-10k").unwrap().triangles),
+        (
+            "identical",
+            vec![Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y, 0); 300],
+        ),
+    ] {
+        let (lbvh, parents) = build_lbvh_from_boxes_cpu(&prim_boxes_cpu(&triangles));
+        let lbvh = WorkingTree::from_lbvh(lbvh, parents);
+        for settings in [TreeletSettings::BALANCED, TreeletSettings::HIGH_QUALITY] {
+            let plain = CostModel::from(&sah);
+            let fused = CostModel {
+                fused: true,
+                ..plain
+            };
+            let device = optimize_lbvh_cpu(lbvh.clone(), &settings, &fused);
+            let twin = optimize_lbvh_cpu(lbvh.clone(), &settings, &plain);
+            let fraction = assert_optimizer_agrees(&device, &twin, &sah);
+            println!(
+                "{name}, {settings:?}: {:.3} % of internal nodes hold the same primitives under fused arithmetic",
+                fraction * 100.0
+            );
+        }
+    }
+}
+
 #[test]
 fn small_and_degenerate_inputs() {
     let builder =
         &mut TrbvhBuilder::new(gpu(), TreeletSettings::BALANCED, SahParams::default()).unwrap();
     for n in [1usize, 2, 3, 4, 9] {
-        check_gpu_equals_cpu(builder, random_soup(n, n as u64), TreeletSettings::BALANCED);
+        check_gpu_against_cpu(builder, random_soup(n, n as u64), TreeletSettings::BALANCED);
     }
     let t = Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y, 0);
-    check_gpu_equals_cpu(builder, vec![t; 500], TreeletSettings::BALANCED);
+    check_gpu_against_cpu(builder, vec![t; 500], TreeletSettings::BALANCED);
 }
 
 #[test]
@@ -243,11 +415,14 @@ fn sah_never_increases_and_hits_equal_brute_force() {
         load_scene("field-10k").unwrap(),
         scene_of(random_soup(4000, 9)),
     ] {
-        let lbvh = build_lbvh_cpu(&scene.triangles);
         let mut gpu_scene = GpuScene::upload_geometry(gpu(), &scene).unwrap();
         let mut builder = TrbvhBuilder::new(gpu(), TreeletSettings::BALANCED, sah).unwrap();
-        builder.build(gpu(), &mut gpu_scene).unwrap();
-        let bvh = gpu_scene.download_bvh(gpu()).unwrap();
+        let stages = builder.build_stages(gpu(), &mut gpu_scene).unwrap();
+        let lbvh = Bvh {
+            nodes: stages.lbvh.nodes,
+            prim_indices: stages.lbvh.prims,
+        };
+        let bvh = stages.bvh;
         validate(&bvh, &scene.triangles).unwrap();
         let (before, after) = (sah_cost(&lbvh, &sah), sah_cost(&bvh, &sah));
         println!("{}: LBVH SAH {before:.2} -> TRBVH {after:.2}", scene.name);
@@ -263,18 +438,27 @@ fn sah_never_increases_and_hits_equal_brute_force() {
     }
 }
 
+/// Memory-ordering stress of the treelet rounds and the collapse: 100 builds on the device give
+/// its first tree exactly; that tree is valid and within 0.5 % SAH of the CPU twin's.
 #[test]
 fn repeated_builds_are_identical_and_valid() {
     let sah = SahParams::default();
     let scene = scene_of(random_soup(20_000, 77));
     let expected = build_trbvh_cpu(&scene.triangles, &TreeletSettings::BALANCED, &sah);
-    validate(&expected, &scene.triangles).unwrap();
     let mut gpu_scene = GpuScene::upload_geometry(gpu(), &scene).unwrap();
     let mut builder = TrbvhBuilder::new(gpu(), TreeletSettings::BALANCED, sah).unwrap();
-    for round in 0..100 {
+    builder.build(gpu(), &mut gpu_scene).unwrap();
+    let first = gpu_scene.download_bvh(gpu()).unwrap();
+    validate(&first, &scene.triangles).unwrap();
+    let (got, want) = (sah_cost(&first, &sah), sah_cost(&expected, &sah));
+    assert!(
+        (got - want).abs() <= 0.005 * want,
+        "SAH {got} vs CPU twin {want}"
+    );
+    for round in 1..100 {
         builder.build(gpu(), &mut gpu_scene).unwrap();
         let bvh = gpu_scene.download_bvh(gpu()).unwrap();
-        assert!(bvh == expected, "build {round} differs from the CPU twin");
+        assert!(bvh == first, "build {round} differs from the first");
     }
 }
 

@@ -1,17 +1,10 @@
 // The Morton grid of triangle pre-splitting (Karras & Aila 2013, §5): a cubic grid of 2^21 cells
 // per axis over the scene box (cell size from its longest side, as the LBVH keys). The including
-// kernel declares `scene_bounds` (the scene box at [0], from the box reduction) and `params.zero`
-// (always 0, see `unfused`).
+// kernel declares `scene_bounds` (the scene box at [0], from the box reduction).
 
 const GRID: f32 = 2097152.0;
 const GRID_MAX: f32 = 2097151.0;
 const NO_BIT: u32 = 0xffffffffu;
-
-// XOR with a zero the compiler cannot see keeps a product out of FMA contraction, so sums round
-// exactly as in the CPU twin.
-fn unfused(x: f32) -> f32 {
-    return bitcast<f32>(bitcast<u32>(x) ^ params.zero);
-}
 
 struct SplitGrid {
     scene_min: vec3<f32>,
@@ -63,5 +56,5 @@ fn highest_differing_bit(a: vec3<u32>, b: vec3<u32>) -> u32 {
 
 fn box_area(lo: vec3<f32>, hi: vec3<f32>) -> f32 {
     let e = hi - lo;
-    return 2.0 * (unfused(e.x * e.y) + unfused(e.y * e.z) + unfused(e.z * e.x));
+    return 2.0 * (e.x * e.y + e.y * e.z + e.z * e.x);
 }

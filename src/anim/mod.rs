@@ -38,8 +38,8 @@ pub use debris::Explosion;
 pub use obj_sequence::ObjSequence;
 pub use refit::RefitBuilder;
 pub use registry::{
-    animation_names, is_animation, load_animation, AnimationEntry, AnimationSource, ANIMATIONS,
-    DEFAULT_ANIMATION,
+    animation_names, is_animation, load_animation, load_still, AnimationEntry, AnimationSource,
+    ANIMATIONS, DEFAULT_ANIMATION,
 };
 pub use time_range::TimeRange;
 pub use update_mode::{TreeUpdater, UpdateMode};

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 
 use super::{Animation, BartAnimation, Explosion, Flag, ObjSequence, RigidBodies};
-use crate::scene::{shared_scenes_dir, Camera};
+use crate::scene::{load_scene, shared_scenes_dir, Camera, Scene};
 use crate::{Error, Result};
 
 /// The animated scene `treelet view` (and `treelet` on a display) opens by default.
@@ -105,9 +105,18 @@ pub fn animation_names() -> Vec<&'static str> {
     ANIMATIONS.iter().map(|e| e.name).collect()
 }
 
-/// Whether `name_or_path` names an animated scene: a registered name or a folder (OBJ sequence).
+/// Whether `name_or_path` names an animated scene: a registered name, a BART `.aff` file or a
+/// folder (OBJ sequence).
 pub fn is_animation(name_or_path: &str) -> bool {
-    ANIMATIONS.iter().any(|e| e.name == name_or_path) || Path::new(name_or_path).is_dir()
+    ANIMATIONS.iter().any(|e| e.name == name_or_path)
+        || has_aff_extension(name_or_path)
+        || Path::new(name_or_path).is_dir()
+}
+
+fn has_aff_extension(path: &str) -> bool {
+    Path::new(path)
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("aff"))
 }
 
 /// A shared scene's path, or an error saying where we looked.
@@ -135,14 +144,21 @@ fn shared_path(name: &str, relative: &str) -> Result<PathBuf> {
     }
 }
 
-/// Loads an animated scene by registry name (`ANIMATIONS`) or as the OBJ sequence in a folder.
+/// Loads an animated scene by registry name (`ANIMATIONS`), from the path of a BART `.aff` file
+/// (its includes relative to it), or as the OBJ sequence in a folder.
 ///
-/// Errors: an unknown name that is no folder gives `Error::UnknownScene` (listing the animated
-/// scenes); a missing shared scene gives `Error::Io` (saying where it looked); BART and OBJ
-/// problems come from their loaders.
+/// Errors: an unknown name that is no `.aff` file or folder gives `Error::UnknownScene` (listing
+/// the animated scenes); a missing shared scene gives `Error::Io` (saying where it looked); BART
+/// and OBJ problems (a missing `.aff` file among them) come from their loaders.
 pub fn load_animation(name_or_path: &str) -> Result<Box<dyn Animation>> {
     let Some(entry) = ANIMATIONS.iter().find(|e| e.name == name_or_path) else {
         let path = Path::new(name_or_path);
+        if has_aff_extension(name_or_path) {
+            let name = path
+                .file_stem()
+                .map_or(name_or_path.into(), |s| s.to_string_lossy());
+            return Ok(Box::new(BartAnimation::load(&name, path)?));
+        }
         if path.is_dir() {
             return Ok(Box::new(ObjSequence::load(name_or_path, path)?));
         }
@@ -165,6 +181,16 @@ pub fn load_animation(name_or_path: &str) -> Result<Box<dyn Animation>> {
             })
         }
     })
+}
+
+/// A scene to render or measure as a still: a static scene by name or path (`load_scene`), or an
+/// animated scene's first frame (by name, `.aff` file or OBJ-sequence folder).
+pub fn load_still(name_or_path: &str) -> Result<Scene> {
+    if is_animation(name_or_path) {
+        let animation = load_animation(name_or_path)?;
+        return Ok(animation.scene_at(animation.time_range().start));
+    }
+    load_scene(name_or_path)
 }
 
 #[cfg(test)]

@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use crate::anim::{TreeUpdater, UpdateMode};
 use crate::bvh::{Builder, SahParams};
-use crate::gpu::{aggregate_stages, GpuContext, StageTime};
+use crate::gpu::{aggregate_stages, GpuContext, StageTime, Timing};
 use crate::scene::Scene;
 use crate::trace::GpuScene;
 use crate::Result;
@@ -85,7 +85,7 @@ impl FrameBuilder {
                 ))
             }
             FrameBuilder::Full(builder) => {
-                let (built, report) = builder.build(ctx, scene, params, 1)?;
+                let (built, report) = builder.build(ctx, scene, params, &Timing::quick(1))?;
                 *gpu_scene = built;
                 let timestamped = builder.is_gpu() && report.stages.iter().all(|s| s.ms.is_some());
                 Ok(BuildTiming {

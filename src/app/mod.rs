@@ -32,5 +32,5 @@ mod tradeoff_panel;
 mod viewer;
 mod window_app;
 
-pub use options::ViewerOptions;
+pub use options::{default_update_mode, ViewerOptions};
 pub use window_app::run;

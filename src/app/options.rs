@@ -4,6 +4,8 @@
 use std::path::PathBuf;
 
 use crate::anim::UpdateMode;
+use crate::bvh::treelet::TreeletSettings;
+use crate::bvh::Builder;
 use crate::gpu::GpuOptions;
 
 #[derive(Clone, Debug)]
@@ -11,7 +13,8 @@ pub struct ViewerOptions {
     /// Scene name (see the scene and animation registries), path to an OBJ file, or a folder of
     /// frame OBJs (an OBJ sequence).
     pub scene: String,
-    pub builder: UpdateMode,
+    /// How the tree is made each frame; None: `default_update_mode` for the adapter.
+    pub builder: Option<UpdateMode>,
     pub gpu: GpuOptions,
     /// Inner size of the window in physical pixels.
     pub window_size: (u32, u32),
@@ -19,4 +22,37 @@ pub struct ViewerOptions {
     pub screenshot: Option<PathBuf>,
     /// Exit (status 0) after this many presented frames.
     pub exit_after_frames: Option<u64>,
+}
+
+/// The viewer's builder when none is asked for: the paper's (trbvh, balanced) on a GPU; lbvh on a
+/// software rasterizer, where a treelet build of a default scene takes seconds per frame.
+pub fn default_update_mode(device: wgpu::DeviceType) -> UpdateMode {
+    match device {
+        wgpu::DeviceType::Cpu => UpdateMode::Rebuild(Builder::Lbvh),
+        _ => UpdateMode::Rebuild(Builder::Trbvh(TreeletSettings::BALANCED)),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gpus_open_with_the_papers_builder() {
+        for device in [
+            wgpu::DeviceType::DiscreteGpu,
+            wgpu::DeviceType::IntegratedGpu,
+            wgpu::DeviceType::VirtualGpu,
+            wgpu::DeviceType::Other,
+        ] {
+            assert_eq!(
+                default_update_mode(device),
+                UpdateMode::Rebuild(Builder::Trbvh(TreeletSettings::BALANCED))
+            );
+        }
+        assert_eq!(
+            default_update_mode(wgpu::DeviceType::Cpu),
+            UpdateMode::Rebuild(Builder::Lbvh)
+        );
+    }
 }

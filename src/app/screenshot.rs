@@ -2,7 +2,7 @@
 //! texture of the surface's format, which is copied to a buffer, read back and written as PNG.
 //! Also the timestamped file names of the Screenshot button.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use crate::gpu::{read_buffer, GpuContext};
 use crate::{Error, Result};
@@ -100,13 +100,6 @@ impl Capture {
         image::RgbaImage::from_raw(width, height, rgba)
             .ok_or_else(|| Error::Gpu("screenshot buffer has the wrong size".into()))
     }
-}
-
-/// Writes `image` as a PNG file.
-pub fn save_png(image: &image::RgbaImage, path: &Path) -> Result<()> {
-    image
-        .save(path)
-        .map_err(|e| Error::InvalidArgument(format!("cannot write {}: {e}", path.display())))
 }
 
 /// `treelet-YYYYMMDD-HHMMSS.png` (UTC) in the current directory.

@@ -17,7 +17,7 @@ use super::animated_scene::AnimatedScene;
 use super::camera_control::CameraInput;
 use super::display::PixelRect;
 use super::frame_builder::{BuildTiming, FrameBuilder};
-use super::options::ViewerOptions;
+use super::options::{default_update_mode, ViewerOptions};
 use super::panel::{self, AnimationInfo, PanelActions, PanelControls, PanelInfo, SAH_INTERVAL_S};
 use super::playback::{ClockRequest, Playback};
 use super::sah_reference::{ReferenceKey, SahReference};
@@ -73,7 +73,10 @@ pub struct Viewer {
 impl Viewer {
     /// Loads and builds the first scene; errors here end the program (bad command line).
     pub fn new(ctx: &GpuContext, options: &ViewerOptions) -> Result<Self> {
-        let settings = ViewSettings::new(mode_for_scene(&options.scene, options.builder));
+        let requested = options
+            .builder
+            .unwrap_or_else(|| default_update_mode(ctx.info.device_type));
+        let settings = ViewSettings::new(mode_for_scene(&options.scene, requested));
         let mut builder = FrameBuilder::new(ctx, settings.builder)?;
         let loaded = load_and_build(ctx, &options.scene, &mut builder, &settings)?;
         let mut viewer = Self {

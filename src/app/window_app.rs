@@ -13,10 +13,11 @@ use winit::window::{Window, WindowId};
 
 use super::display::ImageDisplay;
 use super::options::ViewerOptions;
-use super::screenshot::{save_png, timestamped_path, Capture};
+use super::screenshot::{timestamped_path, Capture};
 use super::surface::WindowSurface;
 use super::viewer::Viewer;
 use crate::gpu::GpuContext;
+use crate::trace::save_png;
 use crate::{Error, Result};
 
 /// Background of the window where no image is drawn (yet).

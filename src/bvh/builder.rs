@@ -6,7 +6,7 @@ use std::time::Instant;
 use super::lbvh::LbvhBuilder;
 use super::treelet::{TrbvhBuilder, TreeletSettings};
 use super::{build_sbvh, build_sweep_sah, Bvh, SahParams};
-use crate::gpu::{GpuContext, StageTime};
+use crate::gpu::{GpuContext, StageTime, Timing, Warmup};
 use crate::scene::Scene;
 use crate::trace::GpuScene;
 use crate::{Error, Result};
@@ -31,12 +31,15 @@ pub enum Builder {
 pub const DEFAULT_SPLIT_PERCENT: u32 = 30;
 
 /// Build timings. For GPU builders `build_ms` is the sum of the GPU stage times (timestamp
-/// queries; wall-clock time where the device has none); for CPU builders it is CPU time.
+/// queries; wall-clock time where the device has none) of the median timed build, `builds_ms`
+/// every timed build's; for CPU builders (timed once, no warm-up) it is CPU time.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct BuildReport {
     pub build_ms: f64,
     pub wall_ms: f64,
     pub stages: Vec<StageTime>,
+    pub builds_ms: Vec<f64>,
+    pub warmup: Warmup,
 }
 
 impl Builder {
@@ -127,15 +130,15 @@ impl Builder {
             })
     }
 
-    /// Builds `scene`'s tree and returns the scene on the GPU ready to trace. GPU builders run one
-    /// untimed warm-up build (pipeline compilation) and then `repeats` timed builds, reporting the
-    /// one with the median time.
+    /// Builds `scene`'s tree and returns the scene on the GPU ready to trace. GPU builders run the
+    /// untimed warm-up builds of `timing` (pipeline compilation, GPU clocks) and then
+    /// `timing.repeats` timed builds, reporting the one with the median time.
     pub fn build(
         self,
         ctx: &GpuContext,
         scene: &Scene,
         params: &SahParams,
-        repeats: u32,
+        timing: &Timing,
     ) -> Result<(GpuScene, BuildReport)> {
         match self {
             Builder::Sweep => cpu_build(ctx, scene, "cpu sweep", || {
@@ -147,9 +150,9 @@ impl Builder {
             Builder::Lbvh | Builder::Trbvh(_) | Builder::TrbvhSplit(_) => {
                 let mut gpu_scene = GpuScene::upload_geometry(ctx, scene)?;
                 let mut builder = GpuBuilder::new(ctx, self, params)?;
-                builder.build(ctx, &mut gpu_scene)?;
+                let warmup = timing.warm_up(|| builder.build(ctx, &mut gpu_scene).map(drop))?;
                 let mut reports = Vec::new();
-                for _ in 0..repeats.max(1) {
+                for _ in 0..timing.repeats.max(1) {
                     let start = Instant::now();
                     let stages = builder.build(ctx, &mut gpu_scene)?;
                     ctx.device
@@ -161,11 +164,20 @@ impl Builder {
                         build_ms: gpu_ms.unwrap_or(wall_ms),
                         wall_ms,
                         stages,
+                        ..BuildReport::default()
                     });
                 }
+                let builds_ms: Vec<f64> = reports.iter().map(|r| r.build_ms).collect();
                 reports.sort_by(|a, b| a.build_ms.total_cmp(&b.build_ms));
                 let median = reports.swap_remove(reports.len() / 2);
-                Ok((gpu_scene, median))
+                Ok((
+                    gpu_scene,
+                    BuildReport {
+                        builds_ms,
+                        warmup,
+                        ..median
+                    },
+                ))
             }
         }
     }
@@ -189,6 +201,8 @@ fn cpu_build(
             label: label.into(),
             ms: Some(build_ms),
         }],
+        builds_ms: vec![build_ms],
+        warmup: Warmup::default(),
     };
     Ok((gpu_scene, report))
 }

@@ -48,8 +48,12 @@ pub fn write_bvh(path: &Path, bvh: &Bvh, triangle_count: u32) -> Result<()> {
     for prim in &bvh.prim_indices {
         bytes.extend_from_slice(&prim.to_le_bytes());
     }
-    let mut file = std::fs::File::create(path).map_err(|e| io_error(path, e))?;
-    file.write_all(&bytes).map_err(|e| io_error(path, e))
+    let write_error = |e: std::io::Error| Error::Write {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    };
+    let mut file = std::fs::File::create(path).map_err(write_error)?;
+    file.write_all(&bytes).map_err(write_error)
 }
 
 /// Reads a file written by `write_bvh`: the tree and the scene's triangle count.

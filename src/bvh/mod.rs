@@ -9,6 +9,7 @@ pub mod presplit;
 mod sah;
 mod sbvh;
 mod sweep;
+mod traverse;
 pub mod treelet;
 mod validate;
 
@@ -18,4 +19,5 @@ pub use node::{Bvh, BvhNode, LEAF_FLAG};
 pub use sah::{sah_cost, SahParams};
 pub use sbvh::build_sbvh;
 pub use sweep::build_sweep_sah;
+pub use traverse::BOX_EXIT_SLACK;
 pub use validate::{validate, validate_with_references, ValidationError, ValidationStats};

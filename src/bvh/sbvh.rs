@@ -857,7 +857,7 @@ pub fn build_sbvh(triangles: &[Triangle], params: &SahParams) -> Bvh {
 mod tests {
     use super::*;
     use crate::bvh::{build_sweep_sah, sah_cost, validate, validate_with_references};
-    use crate::geometry::{intersect_triangle, Hit, Ray};
+    use crate::geometry::Ray;
     use crate::trace::brute_force_closest_hit;
     use rand::{Rng, SeedableRng};
     use rand_pcg::Pcg64;
@@ -891,43 +891,6 @@ mod tests {
             .collect()
     }
 
-    /// Closest hit through the tree (CPU twin of the GPU traversal, same box slack).
-    fn traverse(bvh: &Bvh, tris: &[Triangle], ray: &Ray) -> Hit {
-        let origin = Vec3::from(ray.origin);
-        let dir = Vec3::from(ray.dir);
-        let safe = Vec3::select(dir.abs().cmplt(Vec3::splat(1e-30)), Vec3::splat(1e-30), dir);
-        let inv = safe.recip();
-        let mut best = Hit::miss();
-        let mut t_max = ray.t_max;
-        let mut stack = vec![0u32];
-        while let Some(i) = stack.pop() {
-            let node = &bvh.nodes[i as usize];
-            let b = node.bounds();
-            let (t0, t1) = ((b.min - origin) * inv, (b.max - origin) * inv);
-            let enter = t0.min(t1).max_element().max(ray.t_min);
-            let exit = t0.max(t1).min_element().min(t_max) * 1.000_000_4;
-            if enter > exit {
-                continue;
-            }
-            if node.is_leaf() {
-                let first = node.left_or_first as usize;
-                for &tri in &bvh.prim_indices[first..first + node.prim_count() as usize] {
-                    let [v0, v1, v2] = tris[tri as usize].vertices();
-                    let probe = Ray { t_max, ..*ray };
-                    if let Some((t, u, v)) = intersect_triangle(&probe, v0, v1, v2) {
-                        t_max = t;
-                        best = Hit { t, tri, u, v };
-                    }
-                }
-            } else {
-                let (l, r) = node.children();
-                stack.push(r);
-                stack.push(l);
-            }
-        }
-        best
-    }
-
     /// Rays aimed at random points of random triangles from random directions, plus rays from
     /// inside the scene box: the tree's hits equal brute force (ties at equal distance allowed).
     fn assert_traversal_matches(bvh: &Bvh, tris: &[Triangle], count: usize, seed: u64) {
@@ -954,7 +917,7 @@ mod tests {
                 Ray::new(origin, dir, 0.0, f32::MAX)
             };
             let expected = brute_force_closest_hit(tris, &ray);
-            let got = traverse(bvh, tris, &ray);
+            let got = bvh.closest_hit(tris, &ray);
             hits += usize::from(expected.is_hit());
             assert_eq!(
                 expected.is_hit(),

@@ -1,14 +1,16 @@
 //! `treelet bench`: for each requested builder, build, validate, measure SAH and trace diffuse paths;
-//! print one JSON object per line.
+//! print one JSON object per line. Every timed series (builds, traces) follows a warm-up by time,
+//! so that a real GPU runs at full clocks, and is reported as min / median / max. GPU builders run
+//! before the CPU builders of the same scene (a long CPU build lets the GPU clock down).
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use clap::Args;
 use serde::Serialize;
+use treelet::anim::load_still;
 use treelet::bvh::{sah_cost, validate, validate_with_references, write_bvh, Builder};
-use treelet::gpu::{aggregate_stages, GpuContext};
-use treelet::scene::load_scene;
+use treelet::gpu::{aggregate_stages, GpuContext, Spread, Timing, Warmup};
 use treelet::trace::{PathTracer, TraceStats};
 use treelet::Result;
 
@@ -24,16 +26,31 @@ pub struct BenchArgs {
     /// Print JSON lines (the default and only format for now; kept for scripts that pass it)
     #[arg(long)]
     json: bool,
-    /// Untimed trace passes before measuring (the first dispatch compiles shaders)
+    /// Untimed runs (at least) before each timed build series and each timed trace series
     #[arg(long, default_value_t = 1)]
     warmup: u32,
+    /// Untimed GPU work before each timed build series and each timed trace series, in ms of
+    /// wall-clock time: an idle GPU needs ~0.1-0.5 s of work to reach full clocks
+    #[arg(long, default_value_t = 500.0, value_parser = parse_warmup_ms)]
+    warmup_ms: f64,
     /// Write each built tree to this file (format in the README; with several builders the
     /// builder label is added to the file name)
     #[arg(long)]
     export_bvh: Option<PathBuf>,
-    /// Timed builds per GPU builder and timed traces per builder (the medians are reported)
-    #[arg(long, default_value_t = 5)]
+    /// Timed builds per GPU builder and timed traces per builder (min, median and max are reported)
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
     repeats: u32,
+}
+
+fn parse_warmup_ms(s: &str) -> std::result::Result<f64, String> {
+    let ms: f64 = s.parse().map_err(|e| format!("{e}"))?;
+    if ms.is_finite() && ms >= 0.0 {
+        Ok(ms)
+    } else {
+        Err(format!(
+            "must be a non-negative number of milliseconds, got {s}"
+        ))
+    }
 }
 
 #[derive(Serialize)]
@@ -50,9 +67,16 @@ struct BenchRecord {
     references: usize,
     nodes: usize,
     leaves: usize,
+    /// Timed runs of each series, and the warm-up asked for before each.
+    repeats: u32,
+    warmup_ms: f64,
+    /// The median build.
     build_ms: f64,
+    build_ms_spread: Spread,
+    build_warmup: Warmup,
     build_wall_ms: f64,
     mtris_per_s: f64,
+    /// Per stage, of the median build.
     stages_ms: BTreeMap<String, Option<f64>>,
     sah: f32,
     valid: bool,
@@ -61,17 +85,27 @@ struct BenchRecord {
     spp: u32,
     max_depth: u32,
     rays: u64,
+    /// The median trace.
     trace_ms: Option<f64>,
+    trace_ms_spread: Option<Spread>,
+    trace_warmup: Warmup,
     trace_wall_ms: f64,
     mrays_per_s: Option<f64>,
+    mrays_per_s_spread: Option<Spread>,
 }
 
 pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
-    let scene = load_scene(&args.trace.scene)?;
+    let scene = load_still(&args.trace.scene)?;
     let params = args.trace.sah_params()?;
-    let builders = args.trace.builder_variants(&args.builder);
+    let mut builders = args.trace.builder_variants(&args.builder)?;
+    builders.sort_by_key(|b| !b.is_gpu());
+    let timing = Timing {
+        warmup_ms: args.warmup_ms,
+        warmup_runs: args.warmup,
+        repeats: args.repeats,
+    };
     for &builder in &builders {
-        let (gpu_scene, report) = builder.build(gpu, &scene, &params, args.repeats)?;
+        let (gpu_scene, report) = builder.build(gpu, &scene, &params, &timing)?;
         let bvh = gpu_scene.download_bvh(gpu)?;
         let validation = if builder.duplicates_references() {
             validate_with_references(&bvh, &scene.triangles)
@@ -91,14 +125,17 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
             log::info!("wrote {}", path.display());
         }
         let mut tracer = PathTracer::new(gpu, args.trace.render_settings())?;
-        for _ in 0..args.warmup {
-            tracer.trace(gpu, &gpu_scene, &scene.camera, scene.sky, 1)?;
-        }
-        let mut traces = Vec::new();
-        for _ in 0..args.repeats.max(1) {
+        let trace = |tracer: &mut PathTracer| {
             tracer.reset(gpu);
-            traces.push(tracer.trace(gpu, &gpu_scene, &scene.camera, scene.sky, args.trace.spp)?);
+            tracer.trace(gpu, &gpu_scene, &scene.camera, scene.sky, args.trace.spp)
+        };
+        let trace_warmup = timing.warm_up(|| trace(&mut tracer).map(drop))?;
+        let mut traces = Vec::new();
+        for _ in 0..timing.repeats {
+            traces.push(trace(&mut tracer)?);
         }
+        let trace_ms: Option<Vec<f64>> = traces.iter().map(|t| t.trace_ms).collect();
+        let mrays: Option<Vec<f64>> = traces.iter().map(TraceStats::mrays_per_s).collect();
         let stats = median_trace(traces);
         let record = BenchRecord {
             scene: scene.name.clone(),
@@ -113,7 +150,11 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
             references: bvh.prim_indices.len(),
             nodes: bvh.nodes.len(),
             leaves: bvh.leaf_count(),
+            repeats: timing.repeats,
+            warmup_ms: timing.warmup_ms,
             build_ms: report.build_ms,
+            build_ms_spread: Spread::of(&report.builds_ms).expect("at least one timed build"),
+            build_warmup: report.warmup,
             build_wall_ms: report.wall_ms,
             mtris_per_s: scene.triangles.len() as f64 / (report.build_ms * 1e3),
             stages_ms: aggregate_stages(report.stages)
@@ -128,8 +169,11 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
             max_depth: args.trace.max_depth,
             rays: stats.rays,
             trace_ms: stats.trace_ms,
+            trace_ms_spread: trace_ms.and_then(|v| Spread::of(&v)),
+            trace_warmup,
             trace_wall_ms: stats.wall_ms,
             mrays_per_s: stats.mrays_per_s(),
+            mrays_per_s_spread: mrays.and_then(|v| Spread::of(&v)),
         };
         println!(
             "{}",

@@ -65,9 +65,10 @@ pub struct TraceArgs {
     /// Maximum primitives per leaf
     #[arg(long, default_value_t = SahParams::default().max_leaf_size)]
     max_leaf_size: u32,
-    /// Treelet preset for trbvh: fast (n=5, 1 round), balanced (n=7, 3 rounds, the paper's) or high (n=8, 4 rounds)
-    #[arg(long, default_value = "balanced", value_parser = parse_preset)]
-    preset: TreeletSettings,
+    /// Treelet preset for trbvh: fast (n=5, 1 round), balanced (n=7, 3 rounds, the paper's; the
+    /// default) or high (n=8, 4 rounds)
+    #[arg(long, value_parser = parse_preset)]
+    preset: Option<TreeletSettings>,
     /// Leaves per treelet (3..=8) for trbvh, overriding the preset; `bench` takes a comma-separated list
     #[arg(long, value_delimiter = ',')]
     treelet_size: Vec<u32>,
@@ -83,13 +84,14 @@ pub struct TraceArgs {
 impl TraceArgs {
     /// Every combination of the requested treelet sizes and rounds (the preset's where not given).
     fn treelet_variants(&self) -> Vec<TreeletSettings> {
+        let preset = self.preset.unwrap_or(TreeletSettings::BALANCED);
         let sizes = if self.treelet_size.is_empty() {
-            vec![self.preset.treelet_size]
+            vec![preset.treelet_size]
         } else {
             self.treelet_size.clone()
         };
         let rounds = if self.rounds.is_empty() {
-            vec![self.preset.rounds]
+            vec![preset.rounds]
         } else {
             self.rounds.clone()
         };
@@ -105,15 +107,47 @@ impl TraceArgs {
             .collect()
     }
 
+    /// Fails when a treelet option is given but no builder in `builders` has treelets, or a split
+    /// budget but none pre-splits: such an option would be silently ignored.
+    fn check_options_apply(&self, builders: &[Builder]) -> Result<()> {
+        let names = || {
+            let names: Vec<_> = builders.iter().map(|b| b.name()).collect();
+            names.join(", ")
+        };
+        let treelet_options = [
+            ("--treelet-size", !self.treelet_size.is_empty()),
+            ("--rounds", !self.rounds.is_empty()),
+            ("--preset", self.preset.is_some()),
+        ];
+        let has_treelets = builders.iter().any(|b| b.treelet_settings().is_some());
+        if let Some((flag, _)) = treelet_options.iter().find(|(_, given)| *given) {
+            if !has_treelets {
+                return Err(treelet::Error::InvalidArgument(format!(
+                    "{flag} does not apply to builder {}: only trbvh and trbvh-split have treelets",
+                    names()
+                )));
+            }
+        }
+        let splits = builders.iter().any(|b| matches!(b, Builder::TrbvhSplit(_)));
+        if !self.split_budget.is_empty() && !splits {
+            return Err(treelet::Error::InvalidArgument(format!(
+                "--split-budget does not apply to builder {}: only trbvh-split pre-splits",
+                names()
+            )));
+        }
+        Ok(())
+    }
+
     /// The builders to run: `builders`, with trbvh expanded into every treelet variant and
-    /// trbvh-split also into every split budget.
-    fn builder_variants(&self, builders: &[Builder]) -> Vec<Builder> {
+    /// trbvh-split also into every split budget. Fails on options that apply to none of them.
+    fn builder_variants(&self, builders: &[Builder]) -> Result<Vec<Builder>> {
+        self.check_options_apply(builders)?;
         let budgets = if self.split_budget.is_empty() {
             vec![DEFAULT_SPLIT_PERCENT]
         } else {
             self.split_budget.clone()
         };
-        builders
+        Ok(builders
             .iter()
             .flat_map(|&b| match b {
                 Builder::Trbvh(_) => self
@@ -138,7 +172,7 @@ impl TraceArgs {
                     .collect(),
                 other => vec![other],
             })
-            .collect()
+            .collect())
     }
 
     fn render_settings(&self) -> RenderSettings {

@@ -4,11 +4,10 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use treelet::anim::{is_animation, load_animation, UpdateMode};
+use treelet::anim::{load_still, UpdateMode};
 use treelet::bvh::Builder;
-use treelet::gpu::GpuContext;
-use treelet::scene::{load_scene, Scene};
-use treelet::trace::PathTracer;
+use treelet::gpu::{GpuContext, Timing};
+use treelet::trace::{save_png, PathTracer};
 use treelet::{Error, Result};
 
 use super::{parse_update_mode, render_frames, TraceArgs};
@@ -50,16 +49,16 @@ pub fn run(gpu: &GpuContext, args: &RenderArgs) -> Result<()> {
         }
     };
     let out = args.out.clone().unwrap_or_else(|| "treelet.png".into());
-    let scene = load_static(&args.trace.scene)?;
+    let scene = load_still(&args.trace.scene)?;
     let params = args.trace.sah_params()?;
     log::info!("{}: {} triangles", scene.name, scene.triangles.len());
-    let builders = args.trace.builder_variants(&[builder]);
+    let builders = args.trace.builder_variants(&[builder])?;
     let [builder] = builders[..] else {
         return Err(Error::InvalidArgument(
             "render takes one --treelet-size and one --rounds value".into(),
         ));
     };
-    let (gpu_scene, report) = builder.build(gpu, &scene, &params, 1)?;
+    let (gpu_scene, report) = builder.build(gpu, &scene, &params, &Timing::quick(1))?;
     log::info!(
         "{} build: {:.2} ms, {} nodes",
         builder.label(),
@@ -69,10 +68,7 @@ pub fn run(gpu: &GpuContext, args: &RenderArgs) -> Result<()> {
     let mut tracer = PathTracer::new(gpu, args.trace.render_settings())?;
     let stats = tracer.trace(gpu, &gpu_scene, &scene.camera, scene.sky, args.trace.spp)?;
     let image = tracer.read_image(gpu)?;
-    image.save(&out).map_err(|e| Error::Io {
-        path: out.clone(),
-        source: std::io::Error::other(e),
-    })?;
+    save_png(&image, &out)?;
     let mrays = stats
         .mrays_per_s()
         .map_or("n/a".to_string(), |m| format!("{m:.2}"));
@@ -86,13 +82,4 @@ pub fn run(gpu: &GpuContext, args: &RenderArgs) -> Result<()> {
         gpu.adapter_description()
     );
     Ok(())
-}
-
-/// A static scene by name or path; an animated scene's first frame.
-fn load_static(name: &str) -> Result<Scene> {
-    if is_animation(name) {
-        let animation = load_animation(name)?;
-        return Ok(animation.scene_at(animation.time_range().start));
-    }
-    load_scene(name)
 }

@@ -17,8 +17,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use treelet::anim::{load_animation, TreeUpdater, UpdateMode};
 use treelet::bvh::{sah_cost, Builder};
-use treelet::gpu::{aggregate_stages, GpuContext, StageTime};
-use treelet::trace::{GpuScene, PathTracer};
+use treelet::gpu::{aggregate_stages, GpuContext, StageTime, Timing};
+use treelet::trace::{save_png, GpuScene, PathTracer};
 use treelet::{Error, Result};
 
 use super::render::RenderArgs;
@@ -59,7 +59,7 @@ pub fn run(gpu: &GpuContext, args: &RenderArgs, frames: u32) -> Result<()> {
     let mut animation = load_animation(&args.trace.scene)?;
     let params = args.trace.sah_params()?;
     let mode = args.builder.unwrap_or(UpdateMode::Rebuild(Builder::Lbvh));
-    let [builder] = args.trace.builder_variants(&[mode.builder()])[..] else {
+    let [builder] = args.trace.builder_variants(&[mode.builder()])?[..] else {
         return Err(Error::InvalidArgument(
             "render takes one --treelet-size, --rounds and --split-budget value".into(),
         ));
@@ -69,9 +69,9 @@ pub fn run(gpu: &GpuContext, args: &RenderArgs, frames: u32) -> Result<()> {
         UpdateMode::Refit(_) => UpdateMode::Refit(builder),
     };
     let out_dir = args.out.clone().unwrap_or_else(|| "frames".into());
-    std::fs::create_dir_all(&out_dir).map_err(|source| Error::Io {
+    std::fs::create_dir_all(&out_dir).map_err(|e| Error::Write {
         path: out_dir.clone(),
-        source,
+        message: e.to_string(),
     })?;
     let range = animation.time_range();
     let first = animation.scene_at(range.start);
@@ -110,7 +110,9 @@ pub fn run(gpu: &GpuContext, args: &RenderArgs, frames: u32) -> Result<()> {
                 let start = Instant::now();
                 let scene = animation.scene_at(t);
                 let animate_ms = elapsed_ms(start);
-                let (built, report) = mode.builder().build(gpu, &scene, &params, 1)?;
+                let (built, report) =
+                    mode.builder()
+                        .build(gpu, &scene, &params, &Timing::quick(1))?;
                 gpu_scene = built;
                 (Some(animate_ms), report.build_ms, report.stages)
             }
@@ -169,8 +171,5 @@ pub fn run(gpu: &GpuContext, args: &RenderArgs, frames: u32) -> Result<()> {
 }
 
 fn save_frame(tracer: &PathTracer, gpu: &GpuContext, path: &Path) -> Result<()> {
-    tracer.read_image(gpu)?.save(path).map_err(|e| Error::Io {
-        path: path.to_path_buf(),
-        source: std::io::Error::other(e),
-    })
+    save_png(&tracer.read_image(gpu)?, path)
 }

@@ -11,9 +11,9 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
+use treelet::anim::load_still;
 use treelet::bvh::SahParams;
 use treelet::gpu::GpuContext;
-use treelet::scene::load_scene;
 use treelet::trace::{PathTracer, RenderSettings};
 use treelet::tradeoff::{
     best_ranges, configurations, effective_mrays, log_space, measure, median_of_passes,
@@ -109,7 +109,7 @@ pub fn run(gpu: &GpuContext, args: &TradeoffArgs) -> Result<()> {
             "--max-leaf-size must be at least 1".into(),
         ));
     }
-    let scene = load_scene(&args.scene)?;
+    let scene = load_still(&args.scene)?;
     let mut tracer = PathTracer::new(
         gpu,
         RenderSettings {

@@ -18,9 +18,10 @@ pub struct ViewArgs {
     #[arg(long, default_value = DEFAULT_ANIMATION)]
     scene: String,
     /// BVH builder (GPU builders are rebuilt every frame); for animated scenes also `refit` or
-    /// `refit-trbvh` (the first frame's tree, refitted every frame)
-    #[arg(long, default_value = "lbvh", value_parser = parse_update_mode)]
-    builder: UpdateMode,
+    /// `refit-trbvh` (the first frame's tree, refitted every frame). Default: trbvh on a GPU, lbvh
+    /// on a software rasterizer
+    #[arg(long, value_parser = parse_update_mode)]
+    builder: Option<UpdateMode>,
     /// Window width in pixels
     #[arg(long, default_value_t = 1280, value_parser = clap::value_parser!(u32).range(1..))]
     width: u32,

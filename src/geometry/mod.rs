@@ -2,6 +2,8 @@
 
 mod aabb;
 mod ray;
+mod ray_triangle;
 
 pub use aabb::Aabb;
-pub use ray::{intersect_triangle, Hit, Ray};
+pub use ray::{Hit, Ray};
+pub use ray_triangle::{intersect_triangle, RayTriangleTest};

@@ -1,6 +1,5 @@
-//! Rays and the Möller–Trumbore ray/triangle test. The WGSL twin lives in
-//! `shaders/include/ray_triangle.wgsl`; both use the same operation order so CPU brute force and
-//! GPU traversal agree on hits.
+//! Rays and hits as the GPU query kernel reads and writes them (WGSL twins `Ray` and `Hit` in
+//! `shaders/include/bvh_node.wgsl`).
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
@@ -53,26 +52,4 @@ impl Ray {
             t_max,
         }
     }
-}
-
-/// Möller–Trumbore. Returns (t, u, v) when the ray hits the triangle with t in (t_min, t_max).
-/// Edges are inclusive (u >= 0, v >= 0, u + v <= 1).
-pub fn intersect_triangle(ray: &Ray, v0: Vec3, v1: Vec3, v2: Vec3) -> Option<(f32, f32, f32)> {
-    let o = Vec3::from(ray.origin);
-    let d = Vec3::from(ray.dir);
-    let e1 = v1 - v0;
-    let e2 = v2 - v0;
-    let p = d.cross(e2);
-    let det = e1.dot(p);
-    if det == 0.0 {
-        return None;
-    }
-    let inv_det = 1.0 / det;
-    let s = o - v0;
-    let u = s.dot(p) * inv_det;
-    let q = s.cross(e1);
-    let v = d.dot(q) * inv_det;
-    let t = e2.dot(q) * inv_det;
-    let inside = u >= 0.0 && v >= 0.0 && u + v <= 1.0;
-    (inside && t > ray.t_min && t < ray.t_max).then_some((t, u, v))
 }

@@ -1,6 +1,9 @@
 //! Device creation: adapter selection (discrete GPU first, or one picked by name), explicit
 //! features and limits, and a one-line description of what was chosen.
 
+use std::collections::HashMap;
+use std::sync::Mutex;
+
 use crate::{Error, Result};
 
 /// How to choose the adapter.
@@ -19,6 +22,8 @@ pub struct GpuContext {
     pub info: wgpu::AdapterInfo,
     /// Timestamp queries are available (otherwise timings read "n/a").
     pub timestamps: bool,
+    /// Compute pipelines by (kernel, entry point), compiled once per device.
+    pub(crate) pipelines: Mutex<HashMap<(String, String), wgpu::ComputePipeline>>,
 }
 
 /// Preference order of adapter types: discrete GPUs first, software rasterizers last.
@@ -77,6 +82,7 @@ impl GpuContext {
             queue,
             timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY),
             info,
+            pipelines: Mutex::default(),
         })
     }
 

@@ -1,10 +1,11 @@
 //! GPU plumbing: device and adapter selection (`context`), storage buffers and read-back
-//! (`buffers`), WGSL sources with includes and pipeline creation (`shaders`), and timestamp-query
-//! timing (`timer`).
+//! (`buffers`), WGSL sources with includes and pipeline creation (`shaders`), timestamp-query
+//! timing (`timer`), and warm-up plans and min/median/max of repeated timings (`spread`).
 
 mod buffers;
 mod context;
 mod shaders;
+mod spread;
 mod timer;
 
 pub use buffers::{
@@ -12,4 +13,5 @@ pub use buffers::{
 };
 pub use context::{GpuContext, GpuOptions};
 pub use shaders::{compute_pipeline, shader_source, KERNELS};
+pub use spread::{Spread, Timing, Warmup};
 pub use timer::{aggregate_stages, GpuTimer, StageTime};

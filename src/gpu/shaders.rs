@@ -172,8 +172,18 @@ fn expand(source: &str, included: &mut Vec<&'static str>) -> String {
     out
 }
 
-/// A compute pipeline for `entry` of kernel `name`, with its bind group layout derived from the shader.
+/// A compute pipeline for `entry` of kernel `name`, with its bind group layout derived from the
+/// shader; compiled on first use and cached in the context.
 pub fn compute_pipeline(ctx: &GpuContext, name: &str, entry: &str) -> wgpu::ComputePipeline {
+    let key = (name.to_string(), entry.to_string());
+    let mut cache = ctx.pipelines.lock().unwrap_or_else(|e| e.into_inner());
+    cache
+        .entry(key)
+        .or_insert_with(|| create_pipeline(ctx, name, entry))
+        .clone()
+}
+
+fn create_pipeline(ctx: &GpuContext, name: &str, entry: &str) -> wgpu::ComputePipeline {
     let module = ctx
         .device
         .create_shader_module(wgpu::ShaderModuleDescriptor {

@@ -4,14 +4,15 @@
 //! Policy, applied to every triangle in order:
 //!
 //! 1. **Non-finite** (`SanitizeReport::non_finite`): a triangle with any vertex coordinate that is
-//!    NaN or ±infinity is dropped. So is a triangle whose coordinates are finite but so large that
-//!    the cross product of its edges overflows `f32` (its area, and every box or SAH cost that
-//!    contains it, would be infinite).
-//! 2. **Degenerate** (`SanitizeReport::degenerate`): a triangle whose edge cross product
+//!    NaN or ±infinity is dropped.
+//! 2. **Overflowing** (`SanitizeReport::overflowing`): a triangle whose coordinates are finite but
+//!    so large that its edges or their cross product overflow `f32` is dropped (its area, and
+//!    every box or SAH cost that contains it, would be infinite).
+//! 3. **Degenerate** (`SanitizeReport::degenerate`): a triangle whose edge cross product
 //!    `(v1 - v0) × (v2 - v0)` is exactly the zero vector is dropped: repeated vertices, collinear
 //!    vertices, or a triangle so small that its area underflows to zero in `f32`. Thin triangles
 //!    with a non-zero cross product are kept.
-//! 3. **Bad material** (`SanitizeReport::bad_material`): a surviving triangle whose material index
+//! 4. **Bad material** (`SanitizeReport::bad_material`): a surviving triangle whose material index
 //!    is not below `materials.len()` is kept and re-pointed at a default material, a non-emissive
 //!    0.75 grey (`DEFAULT_ALBEDO`) appended once to the end of the material list (only when at
 //!    least one triangle needs it). Existing materials and indices are never renumbered.
@@ -29,8 +30,10 @@ pub const DEFAULT_ALBEDO: f32 = 0.75;
 /// What `sanitize` removed or repaired; all zero for a clean scene.
 #[derive(Debug, Default, Clone, Copy, PartialEq)]
 pub struct SanitizeReport {
-    /// Triangles dropped for a NaN/infinite coordinate (or an edge cross product that overflows).
+    /// Triangles dropped for a NaN/infinite coordinate.
     pub non_finite: usize,
+    /// Triangles dropped because their edges or edge cross product overflow `f32`.
+    pub overflowing: usize,
     /// Triangles dropped for zero area (edge cross product exactly zero).
     pub degenerate: usize,
     /// Triangles kept but re-pointed at the appended default material.
@@ -47,6 +50,7 @@ impl SanitizeReport {
 enum Verdict {
     Keep,
     NonFinite,
+    Overflowing,
     Degenerate,
 }
 
@@ -57,7 +61,7 @@ fn classify(t: &Triangle) -> Verdict {
     }
     let n = (b - a).cross(c - a);
     if !n.is_finite() {
-        Verdict::NonFinite
+        Verdict::Overflowing
     } else if n == Vec3::ZERO {
         Verdict::Degenerate
     } else {
@@ -72,6 +76,10 @@ pub fn sanitize(scene: &mut Scene) -> SanitizeReport {
         Verdict::Keep => true,
         Verdict::NonFinite => {
             report.non_finite += 1;
+            false
+        }
+        Verdict::Overflowing => {
+            report.overflowing += 1;
             false
         }
         Verdict::Degenerate => {
@@ -100,11 +108,12 @@ pub fn sanitize(scene: &mut Scene) -> SanitizeReport {
 
     if !report.is_clean() {
         log::warn!(
-            "scene '{}': dropped {} triangle(s) with non-finite coordinates and {} zero-area \
-             triangle(s); {} triangle(s) with an out-of-range material now use a default grey; \
-             {} triangle(s) left",
+            "scene '{}': dropped {} triangle(s) with non-finite coordinates, {} with coordinates \
+             so large that their edges overflow f32, and {} zero-area triangle(s); {} triangle(s) \
+             with an out-of-range material now use a default grey; {} triangle(s) left",
             scene.name,
             report.non_finite,
+            report.overflowing,
             report.degenerate,
             report.bad_material,
             scene.triangles.len()
@@ -153,7 +162,7 @@ mod tests {
     }
 
     #[test]
-    fn non_finite_triangles_are_dropped() {
+    fn non_finite_and_overflowing_triangles_are_dropped() {
         let mut s = scene(
             vec![
                 tri([f32::NAN, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], 0),
@@ -170,8 +179,10 @@ mod tests {
                     [0.0, f32::NEG_INFINITY, 0.0],
                     0,
                 ),
-                // Finite but the edge cross product overflows f32.
+                // Finite, but the edges overflow f32.
                 tri([-3e38, 0.0, 0.0], [3e38, 0.0, 0.0], [0.0, 3e38, 0.0], 0),
+                // Finite edges whose cross product overflows.
+                tri([0.0, 0.0, 0.0], [1e20, 0.0, 0.0], [0.0, 1e20, 0.0], 0),
             ],
             1,
         );
@@ -179,7 +190,8 @@ mod tests {
         assert_eq!(
             report,
             SanitizeReport {
-                non_finite: 4,
+                non_finite: 3,
+                overflowing: 2,
                 ..Default::default()
             }
         );
@@ -258,7 +270,7 @@ mod tests {
             SanitizeReport {
                 non_finite: 1,
                 degenerate: 1,
-                bad_material: 0
+                ..Default::default()
             }
         );
         assert!(s.triangles.is_empty());

@@ -67,7 +67,9 @@ struct TraceParams {
     sky: [f32; 3],
     samples: u32,
     light_count: u32,
-    _pad: [u32; 3],
+    /// Always 0: keeps the triangle test's products unfused (`opaque` in ray_triangle.wgsl).
+    opaque_zero: u32,
+    _pad: [u32; 2],
 }
 const _: () = assert!(std::mem::size_of::<TraceParams>() == 96);
 
@@ -246,7 +248,8 @@ impl PathTracer {
             sky: sky.to_array(),
             samples,
             light_count,
-            _pad: [0; 3],
+            opaque_zero: 0,
+            _pad: [0; 2],
         }
     }
 

@@ -1,4 +1,4 @@
-//! Batched closest-hit queries on the GPU (`shaders/rays_intersect.wgsl`).
+//! Batched ray queries on the GPU (`shaders/rays_intersect.wgsl`): closest hit, or any hit.
 
 use bytemuck::{Pod, Zeroable};
 
@@ -15,7 +15,10 @@ use crate::{Error, Result};
 struct QueryParams {
     ray_count: u32,
     row_pitch: u32,
-    _pad: [u32; 2],
+    /// Always 0: keeps the triangle test's products unfused (`opaque` in ray_triangle.wgsl).
+    opaque_zero: u32,
+    /// 1: any hit in the interval (stops at the first), 0: the closest hit.
+    any_hit: u32,
 }
 const _: () = assert!(std::mem::size_of::<QueryParams>() == 16);
 
@@ -23,6 +26,16 @@ const WORKGROUP: u32 = 64;
 
 /// Closest hit of every ray through the scene's BVH. Misses have `tri == Hit::MISS`.
 pub fn closest_hits(ctx: &GpuContext, scene: &GpuScene, rays: &[Ray]) -> Result<Vec<Hit>> {
+    query(ctx, scene, rays, false)
+}
+
+/// Some hit of every ray in its interval (the first the traversal finds, as for shadow rays).
+/// Misses have `tri == Hit::MISS`.
+pub fn any_hits(ctx: &GpuContext, scene: &GpuScene, rays: &[Ray]) -> Result<Vec<Hit>> {
+    query(ctx, scene, rays, true)
+}
+
+fn query(ctx: &GpuContext, scene: &GpuScene, rays: &[Ray], any_hit: bool) -> Result<Vec<Hit>> {
     if rays.is_empty() {
         return Ok(Vec::new());
     }
@@ -36,7 +49,8 @@ pub fn closest_hits(ctx: &GpuContext, scene: &GpuScene, rays: &[Ray]) -> Result<
         &QueryParams {
             ray_count,
             row_pitch: gx * WORKGROUP,
-            _pad: [0; 2],
+            opaque_zero: 0,
+            any_hit: u32::from(any_hit),
         },
     );
     let ray_buffer = storage_buffer(ctx, "rays", rays)?;

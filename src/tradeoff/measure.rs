@@ -8,7 +8,7 @@
 
 use super::Measurement;
 use crate::bvh::{sah_cost, validate, validate_with_references, Builder, SahParams};
-use crate::gpu::GpuContext;
+use crate::gpu::{GpuContext, Timing};
 use crate::scene::{Camera, Scene};
 use crate::trace::PathTracer;
 use crate::{Error, Result};
@@ -38,7 +38,8 @@ pub fn measure(
             settings.spp, settings.repeats
         )));
     }
-    let (gpu_scene, report) = builder.build(ctx, scene, &settings.sah, settings.repeats)?;
+    let (gpu_scene, report) =
+        builder.build(ctx, scene, &settings.sah, &Timing::quick(settings.repeats))?;
     let bvh = gpu_scene.download_bvh(ctx)?;
     let validation = if builder.duplicates_references() {
         validate_with_references(&bvh, &scene.triangles)

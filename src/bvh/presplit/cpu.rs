@@ -1,6 +1,7 @@
 //! CPU twin of triangle pre-splitting (Karras & Aila 2013, §5; kernels `triangles_priority.wgsl`,
-//! `splits_budget.wgsl`, `triangles_split.wgsl`): the same float operations in the same order, so
-//! split counts match the GPU exactly and boxes to rounding.
+//! `splits_budget.wgsl`, `triangles_split.wgsl`): the same float operations in the same order.
+//! GPUs may fuse products into adds and divide approximately, so priorities and piece boxes agree
+//! with the kernels' to rounding; split counts from the same priorities and scale agree exactly.
 
 use glam::{UVec3, Vec3};
 
@@ -68,14 +69,21 @@ fn box_area(lo: Vec3, hi: Vec3) -> f32 {
     2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
 }
 
+/// The importance exponent of a triangle's priority: i = b/3 − 20 ≤ 0 for the highest differing
+/// Morton bit b of its box corners' cells; None when the box lies in one cell.
+pub fn split_importance(t: &Triangle, grid: &SplitGrid) -> Option<i32> {
+    let b = t.bounds();
+    let (first, last) = grid.cell_range(b.min, b.max);
+    highest_differing_bit(first, last).map(|bit| (bit / 3) as i32 - 20)
+}
+
 /// q = p³ of one triangle (see `triangles_priority.wgsl`).
 pub fn split_priority(t: &Triangle, grid: &SplitGrid) -> f32 {
-    let [v0, v1, v2] = t.vertices();
-    let (lo, hi) = (v0.min(v1.min(v2)), v0.max(v1.max(v2)));
-    let (first, last) = grid.cell_range(lo, hi);
-    let Some(bit) = highest_differing_bit(first, last) else {
+    let Some(importance) = split_importance(t, grid) else {
         return 0.0;
     };
+    let [v0, v1, v2] = t.vertices();
+    let (lo, hi) = (v0.min(v1.min(v2)), v0.max(v1.max(v2)));
     let (d1, d2) = (v1 - v0, v2 - v0);
     let c = Vec3::new(
         d1.y * d2.z - d1.z * d2.y,
@@ -83,7 +91,6 @@ pub fn split_priority(t: &Triangle, grid: &SplitGrid) -> f32 {
         d1.x * d2.y - d1.y * d2.x,
     );
     let ideal = c.x.abs() + c.y.abs() + c.z.abs();
-    let importance = (bit / 3) as i32 - 20;
     (box_area(lo, hi) - ideal).max(0.0) * 2f32.powi(importance)
 }
 
@@ -163,60 +170,120 @@ fn clip_triangle(t: &Triangle, lo: Vec3, hi: Vec3) -> Option<(Vec3, Vec3)> {
     Some((plo.clamp(lo, hi), phi.clamp(lo, hi)))
 }
 
-/// The split plane of a piece box [lo, hi] as (axis, position): on each axis, the grid plane of
-/// the highest bit in which the first and last overlapped cells differ (the coarsest Morton-grid
-/// plane crossing the box on that axis); of the planes strictly inside the box, the one of the
-/// highest level, ties in Morton bit order (x, y, z). None when no grid plane crosses the box.
-/// See `split_plane` in `triangles_split.wgsl`.
-fn split_plane(grid: &SplitGrid, lo: Vec3, hi: Vec3) -> Option<(usize, f32)> {
-    let (first, last) = grid.cell_range(lo, hi);
-    let mut best: Option<(u32, usize, f32)> = None;
+/// A piece of a triangle being split: its box, the grid cells it covers on each axis (integers,
+/// so that a side cut at a grid plane ends exactly at that plane's cell whatever the rounding of
+/// the plane's position), and the references it still owes.
+#[derive(Clone, Copy)]
+struct Piece {
+    lo: Vec3,
+    hi: Vec3,
+    first: UVec3,
+    last: UVec3,
+    pieces: u32,
+}
+
+impl Piece {
+    /// The piece of box [lo, hi] within the cells [first, last] of its parent.
+    fn within(
+        grid: &SplitGrid,
+        (lo, hi): (Vec3, Vec3),
+        first: UVec3,
+        last: UVec3,
+        pieces: u32,
+    ) -> Self {
+        let (f, l) = grid.cell_range(lo, hi);
+        let f = f.clamp(first, last);
+        let l = l.clamp(f, last);
+        Self {
+            lo,
+            hi,
+            first: f,
+            last: l,
+            pieces,
+        }
+    }
+
+    /// Extent in cells along the piece's longest axis.
+    fn cells(&self) -> u32 {
+        (self.last - self.first + UVec3::ONE).max_element()
+    }
+}
+
+/// The split plane of a piece as (axis, cell, position), skipping the axes in `tried` (a bit
+/// mask): on each axis, the grid plane of the highest bit in which the first and last covered
+/// cells differ (the coarsest Morton-grid plane crossing the piece on that axis; cells below
+/// `cell` lie left of it); of the planes inside the piece box by more than a cell on both sides,
+/// the one of the highest level, ties in Morton bit order (x, y, z). None when no such plane
+/// crosses the piece. See `split_plane` in `triangles_split.wgsl`.
+fn split_plane(grid: &SplitGrid, piece: &Piece, tried: u32) -> Option<(usize, u32, f32)> {
+    let mut best: Option<(u32, usize, u32, f32)> = None;
     for axis in 0..3 {
-        let differing = first[axis] ^ last[axis];
+        let differing = piece.first[axis] ^ piece.last[axis];
+        if tried & (1 << axis) != 0 {
+            continue;
+        }
         if differing == 0 {
             continue;
         }
         let level = 31 - differing.leading_zeros();
-        let cells = ((last[axis] >> level) << level) as f32;
-        let plane = grid.scene_min[axis] + cells * grid.cell;
-        let inside = lo[axis] < plane && plane < hi[axis];
-        if inside && best.is_none_or(|(l, _, _)| level > l) {
-            best = Some((level, axis, plane));
+        let cell = (piece.last[axis] >> level) << level;
+        let plane = grid.scene_min[axis] + cell as f32 * grid.cell;
+        let inside = piece.lo[axis] < plane - grid.cell && plane + grid.cell < piece.hi[axis];
+        if inside && best.is_none_or(|(l, ..)| level > l) {
+            best = Some((level, axis, cell, plane));
         }
     }
-    best.map(|(_, axis, plane)| (axis, plane))
+    best.map(|(_, axis, cell, plane)| (axis, cell, plane))
 }
 
 /// The `pieces` reference boxes of triangle `t` (see `triangles_split.wgsl`).
 pub fn split_triangle(t: &Triangle, pieces: u32, grid: &SplitGrid) -> Vec<Aabb> {
     const MAX_PIECES: usize = 32;
     let mut out = Vec::with_capacity(pieces as usize);
-    let [v0, v1, v2] = t.vertices();
-    let mut stack = vec![(v0.min(v1.min(v2)), v0.max(v1.max(v2)), pieces)];
-    while let Some((lo, hi, n)) = stack.pop() {
+    let b = t.bounds();
+    let (first, last) = grid.cell_range(b.min, b.max);
+    let mut stack = vec![Piece::within(grid, (b.min, b.max), first, last, pieces)];
+    while let Some(piece) = stack.pop() {
         let mut halves = None;
-        if n > 1 && stack.len() + 2 <= MAX_PIECES {
-            if let Some((axis, plane)) = split_plane(grid, lo, hi) {
-                let (mut left_hi, mut right_lo) = (hi, lo);
-                left_hi[axis] = plane;
-                right_lo[axis] = plane;
-                if let (Some(l), Some(r)) = (
-                    clip_triangle(t, lo, left_hi),
-                    clip_triangle(t, right_lo, hi),
-                ) {
-                    halves = Some((l, r));
-                }
+        // A plane whose cut leaves one side empty (the piece only grazes it, by rounding) gives
+        // way to the next candidate.
+        let mut tried = if piece.pieces > 1 && stack.len() + 2 <= MAX_PIECES {
+            0
+        } else {
+            0b111
+        };
+        while halves.is_none() {
+            let Some((axis, cell, plane)) = split_plane(grid, &piece, tried) else {
+                break;
+            };
+            tried |= 1 << axis;
+            let (mut left_hi, mut right_lo) = (piece.hi, piece.lo);
+            left_hi[axis] = plane;
+            right_lo[axis] = plane;
+            if let (Some(l), Some(r)) = (
+                clip_triangle(t, piece.lo, left_hi),
+                clip_triangle(t, right_lo, piece.hi),
+            ) {
+                let (mut below, mut above) = (piece.last, piece.first);
+                below[axis] = cell - 1;
+                above[axis] = cell;
+                let left = Piece::within(grid, l, piece.first, below, 0);
+                let right = Piece::within(grid, r, above, piece.last, 0);
+                halves = Some((left, right));
             }
         }
         match halves {
-            Some((l, r)) => {
-                let (wl, wr) = ((l.1 - l.0).max_element(), (r.1 - r.0).max_element());
-                let share = if wl + wr > 0.0 { wl / (wl + wr) } else { 0.5 };
-                let nl = ((n as f32 * share).round_ties_even() as u32).clamp(1, n - 1);
-                stack.push((r.0, r.1, n - nl));
-                stack.push((l.0, l.1, nl));
+            Some((mut left, mut right)) => {
+                // Shared by extent in cells, rounded half up: integers, the same on every device.
+                let n = piece.pieces;
+                let (wl, wr) = (left.cells(), right.cells());
+                let nl = ((2 * n * wl + wl + wr) / (2 * (wl + wr))).clamp(1, n - 1);
+                left.pieces = nl;
+                right.pieces = n - nl;
+                stack.push(right);
+                stack.push(left);
             }
-            None => out.extend((0..n).map(|_| Aabb::new(lo, hi))),
+            None => out.extend((0..piece.pieces).map(|_| Aabb::new(piece.lo, piece.hi))),
         }
     }
     out

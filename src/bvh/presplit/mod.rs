@@ -10,8 +10,8 @@
 mod cpu;
 
 pub use cpu::{
-    budget_scale, presplit_cpu, split_priority, split_triangle, splits_at, SplitGrid,
-    BISECTION_STEPS, MAX_SPLITS,
+    budget_scale, presplit_cpu, split_importance, split_priority, split_triangle, splits_at,
+    SplitGrid, BISECTION_STEPS, MAX_SPLITS,
 };
 
 use bytemuck::{Pod, Zeroable};
@@ -32,9 +32,7 @@ const WORKGROUP: u32 = 64;
 struct SplitParams {
     count: u32,
     row_pitch: u32,
-    /// Always 0: keeps the kernels' products unfused (see `unfused` in split_grid.wgsl).
-    zero: u32,
-    _pad: u32,
+    _pad: [u32; 2],
 }
 const _: () = assert!(std::mem::size_of::<SplitParams>() == 16);
 
@@ -62,11 +60,20 @@ fn per_triangle_params(ctx: &GpuContext, n: u32) -> ((u32, u32), wgpu::Buffer) {
         &SplitParams {
             count: n,
             row_pitch: gx * WORKGROUP,
-            zero: 0,
-            _pad: 0,
+            _pad: [0; 2],
         },
     );
     ((gx, gy), params)
+}
+
+/// One run of the stage read back (tests): each triangle's priority q, the budget scale E the
+/// search found (split counts are `splits_at(E, q)`), and the references: boxes and triangles.
+#[derive(Clone, Debug)]
+pub struct SplitStages {
+    pub priorities: Vec<f32>,
+    pub scale: f32,
+    pub boxes: Vec<GpuAabb>,
+    pub ref_tris: Vec<u32>,
 }
 
 struct Scratch {
@@ -274,13 +281,13 @@ impl PreSplitter {
         Ok(())
     }
 
-    /// Runs the whole stage for the scene's triangles and reads the references back (tests).
-    pub fn split_and_read(
+    /// Runs the whole stage for the scene's triangles and reads its results back (tests).
+    pub fn split_stages(
         &mut self,
         ctx: &GpuContext,
         scene: &GpuScene,
         budget: u32,
-    ) -> Result<(Vec<GpuAabb>, Vec<u32>)> {
+    ) -> Result<SplitStages> {
         let mut timer = GpuTimer::new(ctx, 2);
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         self.record_counts(ctx, &mut encoder, scene, budget, &mut timer)?;
@@ -290,12 +297,18 @@ impl PreSplitter {
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         self.record_split(ctx, &mut encoder, scene, total, &boxes, &mut timer)?;
         ctx.queue.submit([encoder.finish()]);
-        let tris = read_buffer(
-            ctx,
-            self.ref_tris.as_ref().expect("split recorded"),
-            total as usize,
-        )?;
-        Ok((read_buffer(ctx, &boxes, total as usize)?, tris))
+        let s = self.scratch.as_ref().expect("recorded above");
+        let state: Vec<u32> = read_buffer(ctx, &s.budget_state, 3)?;
+        Ok(SplitStages {
+            priorities: read_buffer(ctx, &s.priorities, scene.triangle_count as usize)?,
+            scale: f32::from_bits(state[2]),
+            boxes: read_buffer(ctx, &boxes, total as usize)?,
+            ref_tris: read_buffer(
+                ctx,
+                self.ref_tris.as_ref().expect("split recorded"),
+                total as usize,
+            )?,
+        })
     }
 
     /// The triangle of each reference of the last split.

@@ -1,9 +1,12 @@
 //! The SAH-optimal topology of one treelet by dynamic programming over all subsets of its leaves
 //! (Karras & Aila 2013, §4, Algorithm 2), CPU side: used by the CPU twin of the GPU optimizer and
 //! checked against brute-force enumeration in tests. Operation order and tie-breaking match
-//! `shaders/treelet_optimize.wgsl` exactly, so GPU and CPU agree bit for bit.
+//! `shaders/treelet_optimize.wgsl`; areas agree bit for bit (the kernel keeps their products
+//! unfused), costs to a few ulps (the kernel may fuse Ci·A into the following add).
 
 use glam::Vec3;
+
+use crate::bvh::SahParams;
 
 /// Largest supported treelet (leaves); 2^8 subsets fit the kernel's workgroup memory.
 pub const MAX_TREELET_SIZE: u32 = 8;
@@ -14,13 +17,32 @@ pub struct CostModel {
     pub ci: f32,
     pub ct: f32,
     pub max_leaf_size: u32,
+    /// Evaluate Ci·a + children as one fused multiply-add, as a GPU compiler may. The twin rounds
+    /// the product first (false) by default; true shows how much a fusing device's trees may
+    /// differ from it (the tolerances of the GPU comparisons are checked against that).
+    pub fused: bool,
+}
+
+impl From<&SahParams> for CostModel {
+    fn from(sah: &SahParams) -> Self {
+        Self {
+            ci: sah.ci,
+            ct: sah.ct,
+            max_leaf_size: sah.max_leaf_size,
+            fused: false,
+        }
+    }
 }
 
 impl CostModel {
     /// Cost of a node of area `a` with `n` primitives whose children cost `children` together:
     /// min(Ci·a + children, Ct·a·n) where a leaf of n primitives is allowed.
     pub fn combine(&self, a: f32, n: u32, children: f32) -> f32 {
-        let split = self.ci * a + children;
+        let split = if self.fused {
+            self.ci.mul_add(a, children)
+        } else {
+            self.ci * a + children
+        };
         if n <= self.max_leaf_size {
             split.min(self.ct * a * n as f32)
         } else {
@@ -29,7 +51,7 @@ impl CostModel {
     }
 }
 
-/// Surface area with the kernel's operation order.
+/// Surface area with the kernel's operation order (bit-identical to the kernels').
 pub fn surface_area(lo: Vec3, hi: Vec3) -> f32 {
     let e = hi - lo;
     2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)

@@ -115,15 +115,6 @@ impl TreeletSettings {
     }
 }
 
-/// The cost model of the DP, the node costs and the collapse.
-fn cost_model(sah: &SahParams) -> CostModel {
-    CostModel {
-        ci: sah.ci,
-        ct: sah.ct,
-        max_leaf_size: sah.max_leaf_size,
-    }
-}
-
 impl Default for TreeletSettings {
     fn default() -> Self {
         Self::BALANCED
@@ -132,7 +123,7 @@ impl Default for TreeletSettings {
 
 /// CPU twin of the whole GPU TRBVH build.
 pub fn build_trbvh_cpu(triangles: &[Triangle], settings: &TreeletSettings, sah: &SahParams) -> Bvh {
-    optimize_cpu(triangles, settings, sah).collapse(&cost_model(sah), None)
+    optimize_cpu(triangles, settings, sah).collapse(&CostModel::from(sah), None)
 }
 
 /// CPU twin of the whole GPU TRBVH build with triangle pre-splitting (`settings.split_percent`).
@@ -146,7 +137,7 @@ pub fn build_trbvh_split_cpu(
         return build_trbvh_cpu(triangles, settings, sah);
     }
     let (boxes, ref_tris) = presplit_cpu(triangles, budget);
-    optimize_prims_cpu(&boxes, settings, sah).collapse(&cost_model(sah), Some(&ref_tris))
+    optimize_prims_cpu(&boxes, settings, sah).collapse(&CostModel::from(sah), Some(&ref_tris))
 }
 
 /// CPU twin up to the end of the rounds (the working tree before the collapse).
@@ -165,10 +156,21 @@ pub fn optimize_prims_cpu(
     sah: &SahParams,
 ) -> WorkingTree {
     let (lbvh, parents) = build_lbvh_from_boxes_cpu(prim_boxes);
-    let mut tree = WorkingTree::from_lbvh(lbvh, parents);
-    let model = cost_model(sah);
+    optimize_lbvh_cpu(
+        WorkingTree::from_lbvh(lbvh, parents),
+        settings,
+        &CostModel::from(sah),
+    )
+}
+
+/// CPU twin of the rounds over a given LBVH (e.g. the GPU's own, read back).
+pub fn optimize_lbvh_cpu(
+    mut tree: WorkingTree,
+    settings: &TreeletSettings,
+    model: &CostModel,
+) -> WorkingTree {
     for gamma in settings.gammas() {
-        tree.optimize_round(&model, settings.treelet_size, gamma);
+        tree.optimize_round(model, settings.treelet_size, gamma);
     }
     tree
 }
@@ -209,12 +211,17 @@ impl Scratch {
     }
 }
 
-/// The working tree of a GPU build after its rounds, read back for comparison in tests.
+/// A GPU build's intermediate trees, read back for comparison in tests: the LBVH the rounds start
+/// from (costs and counts not yet set), the working tree after the rounds, the collapsed tree.
 #[derive(Clone, Debug)]
 pub struct TrbvhStages {
+    pub lbvh: WorkingTree,
     pub working: WorkingTree,
     pub bvh: Bvh,
 }
+
+/// The trees around the rounds of one build: the LBVH before them and the working tree after.
+type RoundTrees = (WorkingTree, WorkingTree);
 
 /// GPU TRBVH builder: LBVH + treelet rounds + collapse, pipelines and scratch reused per frame.
 pub struct TrbvhBuilder {
@@ -247,11 +254,14 @@ impl TrbvhBuilder {
             .map(|(stages, _)| stages)
     }
 
-    /// Like `build`, and also reads back the working tree after the rounds (tests).
+    /// Like `build`, in two submissions, reading back the LBVH before the rounds and the working
+    /// tree after them (tests).
     pub fn build_stages(&mut self, ctx: &GpuContext, scene: &mut GpuScene) -> Result<TrbvhStages> {
-        let (_, working) = self.build_inner(ctx, scene, true)?;
+        let (_, trees) = self.build_inner(ctx, scene, true)?;
+        let (lbvh, working) = trees.expect("requested");
         Ok(TrbvhStages {
-            working: working.expect("requested"),
+            lbvh,
+            working,
             bvh: scene.download_bvh(ctx)?,
         })
     }
@@ -260,8 +270,8 @@ impl TrbvhBuilder {
         &mut self,
         ctx: &GpuContext,
         scene: &mut GpuScene,
-        read_working: bool,
-    ) -> Result<(Vec<StageTime>, Option<WorkingTree>)> {
+        read_trees: bool,
+    ) -> Result<(Vec<StageTime>, Option<RoundTrees>)> {
         self.settings.validate(&self.sah)?;
         let gammas = self.settings.gammas();
         let mut timer = GpuTimer::new(ctx, 8 + gammas.len() as u32);
@@ -298,13 +308,37 @@ impl TrbvhBuilder {
         }
         let scratch = &*scratch;
         let parents = self.lbvh.parents().expect("recorded above");
+        let read_tree = |ctx: &GpuContext| -> Result<WorkingTree> {
+            let count = (2 * n - 1) as usize;
+            Ok(WorkingTree {
+                nodes: read_buffer(ctx, &scene.nodes, count)?,
+                parents: read_buffer(ctx, parents, count)?,
+                prims: read_buffer(ctx, &scene.prim_indices, n as usize)?,
+                prim_counts: read_buffer(ctx, &scratch.prim_counts, count)?,
+                costs: read_buffer(ctx, &scratch.costs, count)?,
+            })
+        };
+        let lbvh = if read_trees {
+            ctx.queue.submit([encoder.finish()]);
+            encoder = ctx.device.create_command_encoder(&Default::default());
+            let tree = read_tree(ctx)?;
+            Some(WorkingTree::from_lbvh(
+                Bvh {
+                    nodes: tree.nodes,
+                    prim_indices: tree.prims,
+                },
+                tree.parents,
+            ))
+        } else {
+            None
+        };
         let state = TreeletState {
             parents,
             prim_counts: &scratch.prim_counts,
             costs: &scratch.costs,
             arrivals: &scratch.arrivals,
         };
-        let model = cost_model(&self.sah);
+        let model = CostModel::from(&self.sah);
         for gamma in gammas {
             encoder.clear_buffer(&scratch.arrivals, 0, None);
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -342,17 +376,9 @@ impl TrbvhBuilder {
         timer.resolve(&mut encoder);
         ctx.queue.submit([encoder.finish()]);
         let stages = timer.read(ctx)?;
-        let working = if read_working {
-            let count = (2 * n - 1) as usize;
-            Some(WorkingTree {
-                nodes: read_buffer(ctx, &scene.nodes, count)?,
-                parents: read_buffer(ctx, parents, count)?,
-                prims: read_buffer(ctx, &scene.prim_indices, n as usize)?,
-                prim_counts: read_buffer(ctx, &scratch.prim_counts, count)?,
-                costs: read_buffer(ctx, &scratch.costs, count)?,
-            })
-        } else {
-            None
+        let trees = match lbvh {
+            Some(lbvh) => Some((lbvh, read_tree(ctx)?)),
+            None => None,
         };
         let counts: Vec<u32> = read_buffer(ctx, &scratch.tree_counts, 2)?;
         // The compacted tree becomes the scene's; the working buffers become next build's output.
@@ -361,6 +387,6 @@ impl TrbvhBuilder {
         std::mem::swap(&mut scene.prim_indices, &mut scratch.out_prims);
         scene.node_count = counts[0];
         scene.prim_count = counts[1];
-        Ok((stages, working))
+        Ok((stages, trees))
     }
 }
