@@ -1,17 +1,15 @@
-// Rigid bodies moving through a static room (src/anim/bodies.rs, CPU twin `body_triangle`): each
+// Rigid bodies moving through a static room (src/anim/bodies_animate.rs, CPU twin `body_triangle`): each
 // body orbits a centre while bouncing and spinning about its own axis. One invocation per body
 // triangle transforms its rest-pose (body-local) triangle by its body's motion at params.time and
 // writes triangles[k] (the bodies are the scene's animated prefix; the room after it is static).
 #include "bvh_node.wgsl"
 
-struct DispatchParams {
+struct BodiesParams {
+    // One invocation per animated triangle.
     count: u32,
     row_pitch: u32,
-    pad0: u32,
-    pad1: u32,
-}
-
-struct BodiesParams {
+    pad_a: u32,
+    pad_b: u32,
     time: f32,
     pad0: u32,
     pad1: u32,
@@ -45,11 +43,10 @@ struct RestTriangle {
     pad: u32,
 }
 
-@group(0) @binding(0) var<uniform> dispatch: DispatchParams;
-@group(0) @binding(1) var<uniform> params: BodiesParams;
-@group(0) @binding(2) var<storage, read_write> triangles: array<Triangle>;
-@group(0) @binding(3) var<storage, read> bodies: array<BodyMotion>;
-@group(0) @binding(4) var<storage, read> rest: array<RestTriangle>;
+@group(0) @binding(0) var<uniform> params: BodiesParams;
+@group(0) @binding(1) var<storage, read_write> triangles: array<Triangle>;
+@group(0) @binding(2) var<storage, read> bodies: array<BodyMotion>;
+@group(0) @binding(3) var<storage, read> rest: array<RestTriangle>;
 
 // Rodrigues' rotation of v about the unit axis a by the angle with cosine c and sine s.
 fn rotate(v: vec3<f32>, a: vec3<f32>, c: f32, s: f32) -> vec3<f32> {
@@ -58,8 +55,8 @@ fn rotate(v: vec3<f32>, a: vec3<f32>, c: f32, s: f32) -> vec3<f32> {
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let k = gid.x + gid.y * dispatch.row_pitch;
-    if k >= dispatch.count {
+    let k = gid.x + gid.y * params.row_pitch;
+    if k >= params.count {
         return;
     }
     let r = rest[k];

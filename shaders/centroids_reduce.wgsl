@@ -18,6 +18,9 @@ struct ReduceParams {
 @group(0) @binding(0) var<uniform> params: ReduceParams;
 @group(0) @binding(1) var<storage, read> boxes_in: array<Aabb>;
 @group(0) @binding(2) var<storage, read_write> boxes_out: array<Aabb>;
+// The item count's limit (`gpu::ItemCount`): both entries reduce min(params.count,
+// count_limit[0]) items; tiles past them give the empty box.
+@group(0) @binding(3) var<storage, read> count_limit: array<u32>;
 
 var<workgroup> shared_min: array<vec3<f32>, WORKGROUP>;
 var<workgroup> shared_max: array<vec3<f32>, WORKGROUP>;
@@ -47,9 +50,10 @@ fn from_prims(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) gr
     let tile = tile_index(wid, groups);
     var lo = vec3<f32>(F32_MAX);
     var hi = vec3<f32>(-F32_MAX);
+    let count = min(params.count, count_limit[0]);
     for (var k = 0u; k < PER_INVOCATION; k++) {
         let i = tile * TILE + k * WORKGROUP + lid;
-        if i < params.count {
+        if i < count {
             let c = (boxes_in[i].min + boxes_in[i].max) * 0.5;
             lo = min(lo, c);
             hi = max(hi, c);
@@ -63,9 +67,10 @@ fn from_boxes(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) gr
     let tile = tile_index(wid, groups);
     var lo = vec3<f32>(F32_MAX);
     var hi = vec3<f32>(-F32_MAX);
+    let count = min(params.count, count_limit[0]);
     for (var k = 0u; k < PER_INVOCATION; k++) {
         let i = tile * TILE + k * WORKGROUP + lid;
-        if i < params.count {
+        if i < count {
             lo = min(lo, boxes_in[i].min);
             hi = max(hi, boxes_in[i].max);
         }

@@ -1,17 +1,15 @@
-// A waving flag (src/anim/cloth.rs, CPU twin `flag_triangle`): a grid of cols × rows cells of two
+// A waving flag (src/anim/cloth_animate.rs, CPU twin `flag_triangle`): a grid of cols × rows cells of two
 // triangles hanging from a pole, displaced by travelling waves that grow away from the pole, with
 // a little sag and contraction. One invocation per flag triangle writes triangles[k] (the flag is
 // the scene's animated prefix; the pole and the ground after it are static).
 #include "bvh_node.wgsl"
 
-struct DispatchParams {
+struct FlagParams {
+    // One invocation per animated triangle.
     count: u32,
     row_pitch: u32,
-    pad0: u32,
-    pad1: u32,
-}
-
-struct FlagParams {
+    pad_a: u32,
+    pad_b: u32,
     time: f32,
     width: f32,
     height: f32,
@@ -26,9 +24,8 @@ struct FlagParams {
     pad1: u32,
 }
 
-@group(0) @binding(0) var<uniform> dispatch: DispatchParams;
-@group(0) @binding(1) var<uniform> params: FlagParams;
-@group(0) @binding(2) var<storage, read_write> triangles: array<Triangle>;
+@group(0) @binding(0) var<uniform> params: FlagParams;
+@group(0) @binding(1) var<storage, read_write> triangles: array<Triangle>;
 
 fn flag_vertex(i: u32, j: u32) -> vec3<f32> {
     let t = params.time;
@@ -43,8 +40,8 @@ fn flag_vertex(i: u32, j: u32) -> vec3<f32> {
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let k = gid.x + gid.y * dispatch.row_pitch;
-    if k >= dispatch.count {
+    let k = gid.x + gid.y * params.row_pitch;
+    if k >= params.count {
         return;
     }
     let cell = k / 2u;

@@ -1,9 +1,8 @@
 // Add-back of the multi-level exclusive scan of `sort::RadixSort`: after counts_scan.wgsl scanned
-// each BLOCK of `data` locally and the next level scanned the block totals `sums`, every element
+// each SCAN_BLOCK of `data` locally and the next level scanned the block totals `sums`, every element
 // of block b gets sums[b] added, which makes the scan of `data` global.
 // Blocks are linear workgroup indices over a 1D or 2D grid: wid.x + wid.y * num_workgroups.x.
-
-const BLOCK: u32 = 1024u; // 256 invocations * 4, as in counts_scan.wgsl
+#include "constants.wgsl"
 
 struct ScanParams {
     len: u32,
@@ -27,7 +26,7 @@ fn main(
         return;
     }
     let add = sums[block];
-    let base = block * BLOCK + lid * 4u;
+    let base = block * SCAN_BLOCK + lid * 4u;
     for (var i = 0u; i < 4u; i++) {
         if base + i < params.len {
             data[base + i] += add;

@@ -1,13 +1,13 @@
 // Exclusive prefix sum, one level of the multi-level scan of `sort::RadixSort` (reduce-then-scan
-// step 2): each workgroup scans its block of BLOCK = 1024 u32s of `data` in place (4 consecutive
+// step 2): each workgroup scans its block of SCAN_BLOCK = 1024 u32s of `data` in place (4 consecutive
 // per invocation, then a Hillis-Steele scan of the 256 invocation totals in workgroup memory) and
 // writes the block's total to sums[block]. The caller scans `sums` the same way (the next level,
-// its own dispatch) and adds it back with counts_add.wgsl; a length of at most BLOCK needs this
+// its own dispatch) and adds it back with counts_add.wgsl; a length of at most SCAN_BLOCK needs this
 // one dispatch only.
 // Blocks are linear workgroup indices over a 1D or 2D grid: wid.x + wid.y * num_workgroups.x.
+#include "constants.wgsl"
 
 const WORKGROUP: u32 = 256u;
-const BLOCK: u32 = 1024u; // WORKGROUP * 4
 
 struct ScanParams {
     len: u32,
@@ -45,7 +45,7 @@ fn main(
     if block >= params.num_blocks {
         return;
     }
-    let base = block * BLOCK + lid * 4u;
+    let base = block * SCAN_BLOCK + lid * 4u;
     let x = vec4<u32>(load(base), load(base + 1u), load(base + 2u), load(base + 3u));
     let total = x.x + x.y + x.z + x.w;
     partial[lid] = total;

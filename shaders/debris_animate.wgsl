@@ -1,18 +1,16 @@
-// An exploding mesh (src/anim/debris.rs, CPU twin `debris_triangle`): from params.start on, every
+// An exploding mesh (src/anim/debris_animate.rs, CPU twin `debris_triangle`): from params.start on, every
 // triangle flies away from the centre along its own pseudo-random ballistic path, tumbling about
 // its centroid, until its centroid lands on the floor, where it stops. One invocation per mesh
 // triangle reads the intact (rest) triangle and writes triangles[k] (the mesh is the scene's
 // animated prefix; the floor and the crates after it are static).
 #include "bvh_node.wgsl"
 
-struct DispatchParams {
+struct DebrisParams {
+    // One invocation per animated triangle.
     count: u32,
     row_pitch: u32,
-    pad0: u32,
-    pad1: u32,
-}
-
-struct DebrisParams {
+    pad_a: u32,
+    pad_b: u32,
     time: f32,
     start: f32,
     speed: f32,
@@ -27,10 +25,9 @@ struct DebrisParams {
     pad1: u32,
 }
 
-@group(0) @binding(0) var<uniform> dispatch: DispatchParams;
-@group(0) @binding(1) var<uniform> params: DebrisParams;
-@group(0) @binding(2) var<storage, read_write> triangles: array<Triangle>;
-@group(0) @binding(3) var<storage, read> rest: array<Triangle>;
+@group(0) @binding(0) var<uniform> params: DebrisParams;
+@group(0) @binding(1) var<storage, read_write> triangles: array<Triangle>;
+@group(0) @binding(2) var<storage, read> rest: array<Triangle>;
 
 // Height above the floor at which a fragment's centroid comes to rest.
 const REST_HEIGHT: f32 = 0.02;
@@ -55,8 +52,8 @@ fn rotate(v: vec3<f32>, a: vec3<f32>, c: f32, s: f32) -> vec3<f32> {
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let k = gid.x + gid.y * dispatch.row_pitch;
-    if k >= dispatch.count {
+    let k = gid.x + gid.y * params.row_pitch;
+    if k >= params.count {
         return;
     }
     let r = rest[k];

@@ -1,6 +1,6 @@
 // Radix-sort histogram, step 1 of each LSD pass of `sort::RadixSort` (reduce-then-scan): each
 // workgroup counts the 4-bit digits at `params.shift` (only the low `params.bits` of them) of its
-// tile of TILE keys and writes the 16 counts digit-major, counts[digit * num_tiles + tile], so that
+// tile of SORT_TILE keys and writes the 16 counts digit-major, counts[digit * num_tiles + tile], so that
 // one exclusive scan of `counts` gives every (digit, tile) its first output position.
 // Counting without atomics: each invocation counts its keys (strided, coalesced loads) into 16
 // byte-wide counters packed in a vec4 (a one-hot add per key, all vector ALU), widens them to
@@ -11,6 +11,8 @@
 
 @group(0) @binding(1) var<storage, read> keys: array<vec2<u32>>;
 @group(0) @binding(2) var<storage, read_write> counts: array<u32>;
+// The item count's limit (`gpu::ItemCount`): the sort orders the first `sort_count()` pairs.
+@group(0) @binding(3) var<storage, read> count_limit: array<u32>;
 
 #include "radix_digits.wgsl"
 
@@ -24,10 +26,11 @@ fn main(
     if tile >= params.num_tiles {
         return;
     }
+    let n = sort_count();
     var count = vec4<u32>(0u);
     for (var i = 0u; i < ITEMS; i++) {
-        let item = tile * TILE + i * WORKGROUP + lid;
-        if item < params.n {
+        let item = tile * SORT_TILE + i * WORKGROUP + lid;
+        if item < n {
             count += one_hot(digit_of(keys[item]));
         }
     }

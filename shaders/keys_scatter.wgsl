@@ -1,5 +1,5 @@
 // Radix-sort stable scatter, step 3 of each LSD pass of `sort::RadixSort` (reduce-then-scan): each
-// workgroup ranks its tile of TILE (key, value) pairs stably by the 4-bit digit at `params.shift`
+// workgroup ranks its tile of SORT_TILE (key, value) pairs stably by the 4-bit digit at `params.shift`
 // (low `params.bits` bits) and writes each pair to offsets[digit * num_tiles + tile] + rank, where
 // `offsets` is the exclusive scan of the keys_histogram.wgsl counts.
 //
@@ -21,6 +21,8 @@
 @group(0) @binding(3) var<storage, read> offsets: array<u32>;
 @group(0) @binding(4) var<storage, read_write> keys_out: array<vec2<u32>>;
 @group(0) @binding(5) var<storage, read_write> values_out: array<u32>;
+// The item count's limit (`gpu::ItemCount`): the sort orders the first `sort_count()` pairs.
+@group(0) @binding(6) var<storage, read> count_limit: array<u32>;
 
 #include "radix_digits.wgsl"
 
@@ -46,11 +48,12 @@ fn main(
     if tile >= params.num_tiles {
         return;
     }
-    let first = tile * TILE + lid * ITEMS;
+    let first = tile * SORT_TILE + lid * ITEMS;
+    let n = sort_count();
     var count = vec4<u32>(0u);
     for (var i = 0u; i < ITEMS; i++) {
         let item = first + i;
-        if item < params.n {
+        if item < n {
             count += one_hot(digit_of(keys_in[item]));
         }
     }
@@ -85,7 +88,7 @@ fn main(
     var seen = vec4<u32>(0u);
     for (var i = 0u; i < ITEMS; i++) {
         let item = first + i;
-        if item < params.n {
+        if item < n {
             let key = keys_in[item];
             let d = digit_of(key);
             let q = d >> 2u;

@@ -4,22 +4,21 @@
 // evaluation uses δ(i,j) = clz(k_i ^ k_j), or 64 + clz(i ^ j) when the keys are equal.
 // Writes the children of each internal node (its box comes later, bottom-up) and parent links.
 #include "bvh_node.wgsl"
+#include "items.wgsl"
 
-struct HierarchyParams {
-    count: u32,
-    row_pitch: u32,
-    pad0: u32,
-    pad1: u32,
-}
-
-@group(0) @binding(0) var<uniform> params: HierarchyParams;
+@group(0) @binding(0) var<uniform> params: Items;
 @group(0) @binding(1) var<storage, read> keys: array<vec2<u32>>;
 @group(0) @binding(2) var<storage, read_write> nodes: array<BvhNode>;
 @group(0) @binding(3) var<storage, read_write> parents: array<u32>;
+// The item count's limit (`gpu::ItemCount`): the kernel works on min(params.count, count_limit[0]).
+@group(0) @binding(4) var<storage, read> count_limit: array<u32>;
+
+// The leaf count n.
+var<private> leaf_count: u32;
 
 // Length of the common prefix of the keys (with index tie-break) at i and j; -1 outside [0, n).
 fn delta(i: i32, j: i32) -> i32 {
-    if j < 0 || j >= i32(params.count) {
+    if j < 0 || j >= i32(leaf_count) {
         return -1;
     }
     let x = keys[i] ^ keys[j];
@@ -35,7 +34,8 @@ fn delta(i: i32, j: i32) -> i32 {
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let index = gid.x + gid.y * params.row_pitch;
-    if index + 1u >= params.count {
+    leaf_count = min(params.count, count_limit[0]);
+    if index + 1u >= leaf_count {
         return;
     }
     let i = i32(index);
@@ -67,7 +67,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
     }
     let gamma = i + s * d + min(d, 0);
-    let leaf_base = params.count - 1u;
+    let leaf_base = leaf_count - 1u;
     let left = select(u32(gamma), leaf_base + u32(gamma), min(i, j) == gamma);
     let right = select(u32(gamma + 1), leaf_base + u32(gamma + 1), max(i, j) == gamma + 1);
     nodes[index].left_or_first = left;

@@ -2,37 +2,31 @@
 // centroid bounds (LBVH stage 2, Karras 2012 §4), and the identity permutation as sort values.
 // The grid is cubic (cell size from the longest side), so thin axes do not waste top-level splits.
 // Keys are vec2<u32>(low 32 bits, high 32 bits); bit 3k+2 holds x's bit k, 3k+1 y's, 3k z's.
+#include "constants.wgsl"
 #include "aabb.wgsl"
+#include "items.wgsl"
 
-struct MortonParams {
-    count: u32,
-    row_pitch: u32,
-    pad0: u32,
-    pad1: u32,
-}
-
-@group(0) @binding(0) var<uniform> params: MortonParams;
+@group(0) @binding(0) var<uniform> params: Items;
 @group(0) @binding(1) var<storage, read> prim_boxes: array<Aabb>;
 // [0] holds the centroid bounds.
 @group(0) @binding(2) var<storage, read> centroid_bounds: array<Aabb>;
 @group(0) @binding(3) var<storage, read_write> keys: array<vec2<u32>>;
 @group(0) @binding(4) var<storage, read_write> values: array<u32>;
-
-const GRID: f32 = 2097152.0;
-const GRID_MAX: f32 = 2097151.0;
+// The item count's limit (`gpu::ItemCount`): the kernel works on min(params.count, count_limit[0]).
+@group(0) @binding(5) var<storage, read> count_limit: array<u32>;
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x + gid.y * params.row_pitch;
-    if i >= params.count {
+    if i >= min(params.count, count_limit[0]) {
         return;
     }
     let c = (prim_boxes[i].min + prim_boxes[i].max) * 0.5;
     let bounds = centroid_bounds[0];
     let e = bounds.max - bounds.min;
     let extent = max(e.x, max(e.y, e.z));
-    let scale = select(0.0, GRID / extent, extent > 0.0);
-    let q = vec3<u32>(clamp((c - bounds.min) * scale, vec3<f32>(0.0), vec3<f32>(GRID_MAX)));
+    let scale = select(0.0, MORTON_GRID / extent, extent > 0.0);
+    let q = vec3<u32>(clamp((c - bounds.min) * scale, vec3<f32>(0.0), vec3<f32>(MORTON_GRID_MAX)));
     var key = vec2<u32>(0u);
     for (var bit = 0u; bit < 21u; bit++) {
         for (var axis = 0u; axis < 3u; axis++) {

@@ -7,7 +7,8 @@
 #include "bvh_node.wgsl"
 
 struct CompactParams {
-    node_count: u32,
+    // Leaves of the working tree (at most; see count_limit): it has 2n - 1 nodes.
+    leaf_count: u32,
     row_pitch: u32,
     has_refs: u32,
     pad: u32,
@@ -16,28 +17,32 @@ struct CompactParams {
 @group(0) @binding(0) var<uniform> params: CompactParams;
 @group(0) @binding(1) var<storage, read> nodes: array<BvhNode>;
 @group(0) @binding(2) var<storage, read> prim_indices: array<u32>;
-@group(0) @binding(4) var<storage, read> flags: array<u32>;
-@group(0) @binding(5) var<storage, read> kept_scan: array<u32>;
-@group(0) @binding(6) var<storage, read> leaf_prim_scan: array<u32>;
-@group(0) @binding(7) var<storage, read_write> out_nodes: array<BvhNode>;
-@group(0) @binding(8) var<storage, read_write> out_prims: array<u32>;
+@group(0) @binding(3) var<storage, read> flags: array<u32>;
+@group(0) @binding(4) var<storage, read> kept_scan: array<u32>;
+@group(0) @binding(5) var<storage, read> leaf_prim_scan: array<u32>;
+@group(0) @binding(6) var<storage, read_write> out_nodes: array<BvhNode>;
+@group(0) @binding(7) var<storage, read_write> out_prims: array<u32>;
 // [0]: output nodes, [1]: output primitive references
-@group(0) @binding(9) var<storage, read_write> tree_counts: array<u32>;
-@group(0) @binding(10) var<storage, read> ref_tris: array<u32>;
+@group(0) @binding(8) var<storage, read_write> tree_counts: array<u32>;
+@group(0) @binding(9) var<storage, read> ref_tris: array<u32>;
 // Total of the leaf primitive scan.
-@group(0) @binding(11) var<storage, read> leaf_prim_total: array<u32>;
+@group(0) @binding(10) var<storage, read> leaf_prim_total: array<u32>;
+// The item count's limit (`gpu::ItemCount`): the tree has min(params.leaf_count, count_limit[0])
+// leaves.
+@group(0) @binding(11) var<storage, read> count_limit: array<u32>;
 
 #include "leaf_gather.wgsl"
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x + gid.y * params.row_pitch;
+    let node_count = 2u * min(params.leaf_count, count_limit[0]) - 1u;
     if i == 0u {
-        let last = params.node_count - 1u;
+        let last = node_count - 1u;
         tree_counts[0] = kept_scan[last] + (flags[last] & 1u);
         tree_counts[1] = leaf_prim_total[0];
     }
-    if i >= params.node_count || (flags[i] & 1u) == 0u {
+    if i >= node_count || (flags[i] & 1u) == 0u {
         return;
     }
     let node = nodes[i];

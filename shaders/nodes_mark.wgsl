@@ -10,7 +10,8 @@
 #include "bvh_node.wgsl"
 
 struct CollapseParams {
-    node_count: u32,
+    // Leaves of the working tree (at most; see count_limit): it has 2n - 1 nodes.
+    leaf_count: u32,
     row_pitch: u32,
     max_leaf_size: u32,
     ct: f32,
@@ -32,6 +33,10 @@ struct CollapseParams {
 @group(0) @binding(7) var<storage, read_write> leaf_prim_scan: array<u32>;
 @group(0) @binding(8) var<storage, read> prim_indices: array<u32>;
 @group(0) @binding(9) var<storage, read> ref_tris: array<u32>;
+// The item count's limit (`gpu::ItemCount`): the tree has min(params.leaf_count, count_limit[0])
+// leaves. The dispatch covers 2·params.leaf_count - 1 nodes; the nodes past the tree's get zeros,
+// so that the scans over all of them give the tree's totals.
+@group(0) @binding(10) var<storage, read> count_limit: array<u32>;
 
 #include "leaf_gather.wgsl"
 
@@ -53,7 +58,13 @@ fn collapses(node: u32) -> bool {
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x + gid.y * params.row_pitch;
-    if i >= params.node_count {
+    if i >= 2u * params.leaf_count - 1u {
+        return;
+    }
+    if i >= 2u * min(params.leaf_count, count_limit[0]) - 1u {
+        flags[i] = 0u;
+        kept_scan[i] = 0u;
+        leaf_prim_scan[i] = 0u;
         return;
     }
     var kept = true;

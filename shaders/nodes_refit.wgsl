@@ -1,4 +1,4 @@
-// Refit of a fixed tree (src/anim/refit.rs): the topology (child links, leaf ranges, prim_indices)
+// Refit of a fixed tree (src/bvh/nodes_refit.rs): the topology (child links, leaf ranges, prim_indices)
 // stays that of the tree built at the first frame; only the boxes follow the moved triangles. Any
 // tree in the node layout works (LBVH, or a TRBVH tree after collapse and compaction, leaves of
 // several primitives) given its parent links and the list of its leaves.
@@ -8,17 +8,11 @@
 // the box stores and counter increments). Child and leaf words are only read. Counters must start
 // at zero.
 #include "bvh_node.wgsl"
+#include "items.wgsl"
 
 const WORKGROUP: u32 = 64u;
 
-struct RefitParams {
-    leaf_count: u32,
-    row_pitch: u32,
-    pad0: u32,
-    pad1: u32,
-}
-
-@group(0) @binding(0) var<uniform> params: RefitParams;
+@group(0) @binding(0) var<uniform> params: Items;
 @group(0) @binding(1) var<storage, read> triangles: array<Triangle>;
 @group(0) @binding(2) var<storage, read> prim_indices: array<u32>;
 @group(0) @binding(3) var<storage, read> leaves: array<u32>;
@@ -33,7 +27,7 @@ struct RefitParams {
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let j = gid.x + gid.y * params.row_pitch;
     var node = 0u;
-    if j < params.leaf_count {
+    if j < params.count {
         node = leaves[j];
         let first = atomicLoad(&node_words[node * 8u + 3u]);
         let count = atomicLoad(&node_words[node * 8u + 7u]) & ~LEAF_FLAG;
@@ -46,5 +40,5 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
         }
         store_box(node, lo, hi);
     }
-    climb(node, j < params.leaf_count, lid);
+    climb(node, j < params.count, lid);
 }

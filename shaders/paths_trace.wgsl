@@ -23,6 +23,9 @@ struct TraceParams {
     light_count: u32,
     // Always 0 (see `opaque` in ray_triangle.wgsl).
     opaque_zero: u32,
+    // This dispatch's pair of `counters`.
+    counter_slot: u32,
+    pad: u32,
 }
 
 struct PointLight {
@@ -36,7 +39,7 @@ struct PointLight {
 @group(0) @binding(3) var<storage, read> nodes: array<BvhNode>;
 @group(0) @binding(4) var<storage, read> prim_indices: array<u32>;
 @group(0) @binding(5) var<storage, read_write> accum: array<vec4<f32>>;
-// [0]: rays traced, [1]: stack overflows
+// Per dispatch (counter_slot): [2 slot]: rays traced, [2 slot + 1]: stack overflows
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>>;
 @group(0) @binding(7) var<storage, read> lights: array<PointLight>;
 
@@ -128,10 +131,10 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
     }
     atomicAdd(&workgroup_rays, rays);
     if overflows != 0u {
-        atomicAdd(&counters[1], overflows);
+        atomicAdd(&counters[2u * params.counter_slot + 1u], overflows);
     }
     workgroupBarrier();
     if lid == 0u {
-        atomicAdd(&counters[0], atomicLoad(&workgroup_rays));
+        atomicAdd(&counters[2u * params.counter_slot], atomicLoad(&workgroup_rays));
     }
 }

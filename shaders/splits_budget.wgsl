@@ -21,7 +21,7 @@ struct BudgetParams {
 @group(0) @binding(2) var<storage, read_write> budget_state: array<atomic<u32>>;
 @group(0) @binding(3) var<storage, read_write> ref_counts: array<u32>;
 
-const MAX_SPLITS: u32 = 31u;
+#include "constants.wgsl"
 
 var<workgroup> workgroup_sum: atomic<u32>;
 

@@ -22,7 +22,6 @@
 #include "bvh_node.wgsl"
 
 const WORKGROUP: u32 = 32u;
-const MAX_TREELET: u32 = 8u;
 const SUBSETS: u32 = 256u;
 const F32_MAX: f32 = 3.40282347e38;
 
@@ -44,6 +43,8 @@ struct TreeletParams {
 @group(0) @binding(3) var<storage, read_write> prim_counts: array<atomic<u32>>;
 @group(0) @binding(4) var<storage, read_write> costs: array<atomic<u32>>;
 @group(0) @binding(5) var<storage, read_write> arrivals: array<atomic<u32>>;
+// The item count's limit (`gpu::ItemCount`): the tree has min(params.count, count_limit[0]) leaves.
+@group(0) @binding(6) var<storage, read> count_limit: array<u32>;
 
 #include "node_words.wgsl"
 
@@ -318,7 +319,7 @@ fn optimize_treelet(root: u32, lid: u32) {
 @compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let j = gid.x + gid.y * params.row_pitch;
-    let n = params.count;
+    let n = min(params.count, count_limit[0]);
     var node = n - 1u + j;
     var is_climbing = false;
     if lid == 0u {

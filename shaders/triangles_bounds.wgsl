@@ -2,15 +2,9 @@
 // triangle is pre-split; pre-splitting writes several clipped boxes per triangle instead).
 #include "bvh_node.wgsl"
 #include "aabb.wgsl"
+#include "items.wgsl"
 
-struct BoundsParams {
-    count: u32,
-    row_pitch: u32,
-    pad0: u32,
-    pad1: u32,
-}
-
-@group(0) @binding(0) var<uniform> params: BoundsParams;
+@group(0) @binding(0) var<uniform> params: Items;
 @group(0) @binding(1) var<storage, read> triangles: array<Triangle>;
 @group(0) @binding(2) var<storage, read_write> prim_boxes: array<Aabb>;
 

@@ -7,22 +7,16 @@
 // non-negative float) for the budget search.
 #include "bvh_node.wgsl"
 #include "aabb.wgsl"
+#include "items.wgsl"
 
-struct SplitParams {
-    count: u32,
-    row_pitch: u32,
-    pad0: u32,
-    pad1: u32,
-}
-
-@group(0) @binding(0) var<uniform> params: SplitParams;
+@group(0) @binding(0) var<uniform> params: Items;
 @group(0) @binding(1) var<storage, read> triangles: array<Triangle>;
 @group(0) @binding(2) var<storage, read_write> priorities: array<f32>;
 // [0]: bits of the largest priority
 @group(0) @binding(3) var<storage, read_write> budget_state: array<atomic<u32>>;
 
 // [0]: the scene box
-@group(0) @binding(6) var<storage, read> scene_bounds: array<Aabb>;
+@group(0) @binding(4) var<storage, read> scene_bounds: array<Aabb>;
 
 #include "split_grid.wgsl"
 

@@ -13,15 +13,9 @@
 // scanned offset. CPU twin: `split_triangle`.
 #include "bvh_node.wgsl"
 #include "aabb.wgsl"
+#include "items.wgsl"
 
-struct SplitParams {
-    count: u32,
-    row_pitch: u32,
-    pad0: u32,
-    pad1: u32,
-}
-
-@group(0) @binding(0) var<uniform> params: SplitParams;
+@group(0) @binding(0) var<uniform> params: Items;
 @group(0) @binding(1) var<storage, read> triangles: array<Triangle>;
 @group(0) @binding(2) var<storage, read> ref_offsets: array<u32>;
 // [0]: total references

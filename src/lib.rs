@@ -10,9 +10,11 @@
 pub mod anim;
 pub mod app;
 pub mod bvh;
+pub mod device;
 pub mod error;
 pub mod geometry;
 pub mod gpu;
+pub mod kernels;
 
 pub mod scene;
 pub mod sort;

@@ -7,14 +7,12 @@
 mod common;
 
 use common::{assert_clean_failure, gpu, missing_shared_scene, run_treelet};
-use treelet::anim::{
-    load_animation, Animation, Explosion, Flag, RigidBodies, TreeUpdater, UpdateMode,
-};
+use treelet::anim::{load_animation, Animation, Explosion, Flag, RigidBodies};
 use treelet::bvh::treelet::TreeletSettings;
-use treelet::bvh::{sah_cost, validate, Builder, SahParams};
-use treelet::gpu::read_buffer;
+use treelet::bvh::{sah_cost, validate, Builder, SahParams, TreeUpdater, UpdateMode};
+use treelet::device::{Geometry, Tree};
+use treelet::gpu::{ParamSlab, Recorder};
 use treelet::scene::{shared_scenes_dir, BartScene, Triangle};
-use treelet::trace::GpuScene;
 
 /// Small versions of the built-in animations.
 fn small_animations() -> Vec<Box<dyn Animation>> {
@@ -35,13 +33,29 @@ fn check_times(animation: &dyn Animation) -> Vec<f32> {
 }
 
 /// The scene uploaded at its start time, as the viewer and the headless renderer do.
-fn upload(animation: &dyn Animation) -> GpuScene {
+fn upload(animation: &dyn Animation) -> Geometry {
     let first = animation.scene_at(animation.time_range().start);
-    GpuScene::upload_geometry(gpu(), &first).unwrap()
+    Geometry::upload(gpu(), &first).unwrap()
 }
 
-fn gpu_triangles(scene: &GpuScene) -> Vec<Triangle> {
-    read_buffer(gpu(), &scene.triangles, scene.triangle_count as usize).unwrap()
+/// Animates `geometry` to time `t` in a recording of its own, submitted.
+fn animate(animation: &mut dyn Animation, t: f32, geometry: &Geometry) {
+    let mut params = ParamSlab::new(gpu());
+    let mut rec = Recorder::new(gpu(), &mut params, None);
+    animation.animate(&mut rec, t, geometry).unwrap();
+    rec.submit();
+}
+
+/// Updates `tree` to `geometry` with `updater`, in a recording of its own, submitted.
+fn update(updater: &mut TreeUpdater, geometry: &Geometry, tree: &mut Tree) {
+    let mut params = ParamSlab::new(gpu());
+    let mut rec = Recorder::new(gpu(), &mut params, None);
+    updater.record(&mut rec, geometry, &[], tree).unwrap();
+    rec.submit();
+}
+
+fn gpu_triangles(geometry: &Geometry) -> Vec<Triangle> {
+    geometry.read_triangles(gpu()).unwrap()
 }
 
 fn scene_diagonal(triangles: &[Triangle]) -> f32 {
@@ -55,10 +69,10 @@ fn scene_diagonal(triangles: &[Triangle]) -> f32 {
 #[test]
 fn animation_kernels_equal_their_cpu_twins() {
     for mut animation in small_animations() {
-        let mut scene = upload(animation.as_ref());
+        let scene = upload(animation.as_ref());
         let mut expected = Vec::new();
         for t in check_times(animation.as_ref()) {
-            animation.animate(gpu(), t, &mut scene).unwrap();
+            animate(animation.as_mut(), t, &scene);
             animation.evaluate(t, &mut expected);
             let got = gpu_triangles(&scene);
             assert_eq!(got.len(), expected.len());
@@ -90,13 +104,14 @@ fn every_frame_tree_is_valid_for_gpu_builders() {
     let params = SahParams::default();
     for builder in [Builder::Lbvh, Builder::Trbvh(TreeletSettings::BALANCED)] {
         for mut animation in small_animations() {
-            let mut scene = upload(animation.as_ref());
+            let scene = upload(animation.as_ref());
+            let mut tree = Tree::empty(gpu()).unwrap();
             let mut updater =
                 TreeUpdater::new(gpu(), UpdateMode::Rebuild(builder), &params).unwrap();
             for t in check_times(animation.as_ref()) {
-                animation.animate(gpu(), t, &mut scene).unwrap();
-                updater.update(gpu(), &mut scene).unwrap();
-                let bvh = scene.download_bvh(gpu()).unwrap();
+                animate(animation.as_mut(), t, &scene);
+                update(&mut updater, &scene, &mut tree);
+                let bvh = tree.download(gpu()).unwrap();
                 if let Err(e) = validate(&bvh, &gpu_triangles(&scene)) {
                     panic!("{} {} t={t}: {e}", builder.name(), animation.name());
                 }
@@ -110,24 +125,24 @@ fn refits_keep_valid_boxes_and_lose_quality_when_the_mesh_bursts() {
     let params = SahParams::default();
     for mode in UpdateMode::REFITS.iter().copied() {
         let mut animation = Explosion::new(4);
-        let mut refitted = upload(&animation);
-        let mut rebuilt = upload(&animation);
+        let geometry = upload(&animation);
+        let (mut refitted, mut rebuilt) =
+            (Tree::empty(gpu()).unwrap(), Tree::empty(gpu()).unwrap());
         let mut refit = TreeUpdater::new(gpu(), mode, &params).unwrap();
         let mut rebuild =
             TreeUpdater::new(gpu(), UpdateMode::Rebuild(mode.builder()), &params).unwrap();
         let mut costs = Vec::new();
         for t in check_times(&animation) {
-            animation.animate(gpu(), t, &mut refitted).unwrap();
-            animation.animate(gpu(), t, &mut rebuilt).unwrap();
-            refit.update(gpu(), &mut refitted).unwrap();
-            rebuild.update(gpu(), &mut rebuilt).unwrap();
-            let triangles = gpu_triangles(&refitted);
-            let bvh = refitted.download_bvh(gpu()).unwrap();
+            animate(&mut animation, t, &geometry);
+            update(&mut refit, &geometry, &mut refitted);
+            update(&mut rebuild, &geometry, &mut rebuilt);
+            let triangles = gpu_triangles(&geometry);
+            let bvh = refitted.download(gpu()).unwrap();
             if let Err(e) = validate(&bvh, &triangles) {
                 panic!("{} t={t}: {e}", mode.name());
             }
             let refit_sah = sah_cost(&bvh, &params);
-            let rebuild_sah = sah_cost(&rebuilt.download_bvh(gpu()).unwrap(), &params);
+            let rebuild_sah = sah_cost(&rebuilt.download(gpu()).unwrap(), &params);
             eprintln!(
                 "{} t={t:.2}: SAH refit {refit_sah:.2}, rebuild {rebuild_sah:.2}",
                 mode.name()
@@ -211,8 +226,8 @@ fn bart_kitchen_through_the_animation_path_equals_evaluate() {
     let t0 = animation.time_range().start;
     // Upload a later frame, then animate back to frame 0 through the GPU scene.
     let later = animation.scene_at(animation.time_range().frame_time(200));
-    let mut scene = GpuScene::upload_geometry(gpu(), &later).unwrap();
-    animation.animate(gpu(), t0, &mut scene).unwrap();
+    let scene = Geometry::upload(gpu(), &later).unwrap();
+    animate(animation.as_mut(), t0, &scene);
     let mut expected = Vec::new();
     reference.evaluate(t0, &mut expected);
     let got = gpu_triangles(&scene);

@@ -259,3 +259,68 @@ fn options_of_other_builders_are_refused() {
         "--split-budget does not apply to builder trbvh",
     );
 }
+
+/// `bench --export-bvh` writes each builder's tree; `bvh::read_bvh` reads it back as a valid tree
+/// over the scene's triangles, and refuses files that are not one.
+#[test]
+fn exported_trees_read_back_as_valid_trees() {
+    let dir = temp_path("export", "d");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("tree.bvh");
+    let out = treelet(&[
+        "bench",
+        "--scene",
+        "field-10k",
+        "--builder",
+        "sweep,trbvh-split",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--spp",
+        "1",
+        "--repeats",
+        "1",
+        "--warmup-ms",
+        "0",
+        "--export-bvh",
+        file.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let scene = treelet::scene::load_scene("field-10k").unwrap();
+    let mut files: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    files.sort();
+    assert_eq!(files.len(), 2, "{files:?}");
+    for path in &files {
+        let (bvh, triangle_count) = treelet::bvh::read_bvh(path).unwrap();
+        assert_eq!(triangle_count as usize, scene.triangles.len());
+        // The split builder's leaves bound pieces of triangles (references), not whole ones.
+        let split = path.to_string_lossy().contains("split");
+        let valid = if split {
+            treelet::bvh::validate_with_references(&bvh, &scene.triangles)
+        } else {
+            treelet::bvh::validate(&bvh, &scene.triangles)
+        };
+        valid.unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    }
+    let garbage = dir.join("garbage.bvh");
+    // A header promising 5 nodes and 3 references, followed by nothing.
+    let header: Vec<u8> = [5u32, 3, 10, 0]
+        .iter()
+        .flat_map(|w| w.to_le_bytes())
+        .collect();
+    std::fs::write(&garbage, [&b"TRLTBVH1"[..], &header].concat()).unwrap();
+    let e = treelet::bvh::read_bvh(&garbage).unwrap_err().to_string();
+    assert!(e.contains("does not match"), "{e}");
+    std::fs::write(&garbage, b"not a tree at all, just some words").unwrap();
+    let e = treelet::bvh::read_bvh(&garbage).unwrap_err().to_string();
+    assert!(e.contains("not a treelet BVH file"), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -9,16 +9,18 @@ use common::{
     scene_of, test_rays,
 };
 use treelet::bvh::{build_sweep_sah, validate, SahParams};
+use treelet::device::{Geometry, Tree};
 use treelet::scene::{load_scene, Scene};
-use treelet::trace::{closest_hits, GpuScene};
+use treelet::trace::closest_hits;
 
 fn check_scene(scene: &Scene, per_kind: usize, seed: u64) {
     let bvh = build_sweep_sah(&scene.triangles, &SahParams::default());
     validate(&bvh, &scene.triangles).expect("sweep tree is valid");
-    let gpu_scene = GpuScene::upload(gpu(), scene, &bvh).unwrap();
+    let geometry = Geometry::upload(gpu(), scene).unwrap();
+    let tree = Tree::upload(gpu(), &bvh).unwrap();
     let rays = test_rays(&scene.triangles, per_kind, seed);
     let plain: Vec<_> = rays.iter().map(|(_, r)| *r).collect();
-    let hits = closest_hits(gpu(), &gpu_scene, &plain).unwrap();
+    let hits = closest_hits(gpu(), &geometry, &tree, &plain).unwrap();
     let ties = assert_hits_match(&scene.triangles, &rays, &hits);
     assert_cpu_traversal_matches(&bvh, &scene.triangles, &rays);
     println!(

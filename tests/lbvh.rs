@@ -13,8 +13,9 @@ use treelet::bvh::lbvh::{
     prim_boxes_cpu, LbvhBuilder,
 };
 use treelet::bvh::{sah_cost, validate, Bvh, SahParams};
+use treelet::device::{Geometry, Tree};
 use treelet::scene::{load_scene, Triangle};
-use treelet::trace::{closest_hits, GpuScene};
+use treelet::trace::closest_hits;
 
 /// The grid cell (x, y, z) of a 63-bit Morton key (bit 3k+2 holds x's bit k, 3k+1 y's, 3k z's).
 fn morton_cell(key: u64) -> [i64; 3] {
@@ -59,9 +60,9 @@ fn assert_sah_close_to_cpu_twin(bvh: &Bvh, triangles: &[Triangle]) {
 fn check_stages_against_cpu_twins(triangles: Vec<Triangle>) {
     let scene = scene_of(triangles);
     let tris = &scene.triangles;
-    let mut gpu_scene = GpuScene::upload_geometry(gpu(), &scene).unwrap();
+    let geometry = Geometry::upload(gpu(), &scene).unwrap();
     let mut builder = LbvhBuilder::new(gpu());
-    let stages = builder.build_stages(gpu(), &mut gpu_scene).unwrap();
+    let stages = builder.build_stages(gpu(), &geometry).unwrap();
 
     let boxes = prim_boxes_cpu(tris);
     let bounds = centroid_bounds_cpu(&boxes);
@@ -174,9 +175,7 @@ fn degenerate_triangles() {
 #[test]
 fn zero_triangles_is_a_clear_error() {
     let scene = scene_of(Vec::new());
-    let err = GpuScene::upload_geometry(gpu(), &scene)
-        .err()
-        .expect("error");
+    let err = Geometry::upload(gpu(), &scene).err().expect("error");
     assert!(err.to_string().contains("no usable triangles"), "{err}");
 }
 
@@ -186,15 +185,16 @@ fn zero_triangles_is_a_clear_error() {
 #[test]
 fn repeated_builds_are_identical_and_valid() {
     let scene = scene_of(random_soup(100_000, 21));
-    let mut gpu_scene = GpuScene::upload_geometry(gpu(), &scene).unwrap();
+    let geometry = Geometry::upload(gpu(), &scene).unwrap();
+    let mut tree = Tree::empty(gpu()).unwrap();
     let mut builder = LbvhBuilder::new(gpu());
-    builder.build(gpu(), &mut gpu_scene).unwrap();
-    let first = gpu_scene.download_bvh(gpu()).unwrap();
+    builder.build(gpu(), &geometry, &mut tree).unwrap();
+    let first = tree.download(gpu()).unwrap();
     validate(&first, &scene.triangles).unwrap();
     assert_sah_close_to_cpu_twin(&first, &scene.triangles);
     for round in 1..200 {
-        builder.build(gpu(), &mut gpu_scene).unwrap();
-        let bvh = gpu_scene.download_bvh(gpu()).unwrap();
+        builder.build(gpu(), &geometry, &mut tree).unwrap();
+        let bvh = tree.download(gpu()).unwrap();
         assert!(bvh == first, "build {round} differs from the first");
     }
 }
@@ -206,13 +206,14 @@ fn traced_hits_equal_brute_force() {
         load_scene("field-10k").unwrap(),
         scene_of(random_soup(3000, 8)),
     ] {
-        let mut gpu_scene = GpuScene::upload_geometry(gpu(), &scene).unwrap();
+        let geometry = Geometry::upload(gpu(), &scene).unwrap();
+        let mut tree = Tree::empty(gpu()).unwrap();
         LbvhBuilder::new(gpu())
-            .build(gpu(), &mut gpu_scene)
+            .build(gpu(), &geometry, &mut tree)
             .unwrap();
         let rays = test_rays(&scene.triangles, 300, 17);
         let plain: Vec<_> = rays.iter().map(|(_, r)| *r).collect();
-        let hits = closest_hits(gpu(), &gpu_scene, &plain).unwrap();
+        let hits = closest_hits(gpu(), &geometry, &tree, &plain).unwrap();
         assert_hits_match(&scene.triangles, &rays, &hits);
     }
 }

@@ -8,8 +8,9 @@ mod common;
 use common::gpu;
 use glam::Vec3;
 use treelet::bvh::{build_sweep_sah, SahParams};
+use treelet::device::{Geometry, Tree};
 use treelet::scene::{Camera, Material, PointLight, Scene, Triangle};
-use treelet::trace::{GpuScene, PathTracer, RenderSettings};
+use treelet::trace::{PathTracer, RenderSettings};
 
 const SIZE: u32 = 64;
 const SPP: u32 = 4;
@@ -50,7 +51,8 @@ fn scene(lights: Vec<PointLight>, blocker: bool) -> Scene {
 
 fn render(scene: &Scene) -> (image::RgbaImage, u64) {
     let bvh = build_sweep_sah(&scene.triangles, &SahParams::default());
-    let gpu_scene = GpuScene::upload(gpu(), scene, &bvh).unwrap();
+    let geometry = Geometry::upload(gpu(), scene).unwrap();
+    let tree = Tree::upload(gpu(), &bvh).unwrap();
     let settings = RenderSettings {
         width: SIZE,
         height: SIZE,
@@ -59,7 +61,7 @@ fn render(scene: &Scene) -> (image::RgbaImage, u64) {
     };
     let mut tracer = PathTracer::new(gpu(), settings).unwrap();
     let stats = tracer
-        .trace(gpu(), &gpu_scene, &scene.camera, scene.sky, SPP)
+        .trace(gpu(), &geometry, &tree, &scene.camera, scene.sky, SPP)
         .unwrap();
     (tracer.read_image(gpu()).unwrap(), stats.rays)
 }

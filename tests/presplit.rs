@@ -17,9 +17,10 @@ use treelet::bvh::treelet::{
     build_trbvh_cpu, build_trbvh_split_cpu, TrbvhBuilder, TreeletSettings,
 };
 use treelet::bvh::{sah_cost, validate_with_references, SahParams};
+use treelet::device::{Geometry, Tree};
 use treelet::geometry::Aabb;
 use treelet::scene::{load_scene, Triangle};
-use treelet::trace::{closest_hits, GpuScene};
+use treelet::trace::closest_hits;
 
 /// A scene that needs splitting: long diagonal slivers crossing a field of small triangles.
 fn slivers() -> Vec<Triangle> {
@@ -251,8 +252,8 @@ fn gpu_split_agrees_with_cpu_twin() {
     ] {
         let budget = split_budget(tris.len() as u32, percent);
         let scene = scene_of(tris.clone());
-        let gpu_scene = GpuScene::upload_geometry(gpu(), &scene).unwrap();
-        let stages = splitter.split_stages(gpu(), &gpu_scene, budget).unwrap();
+        let geometry = Geometry::upload(gpu(), &scene).unwrap();
+        let stages = splitter.split_stages(gpu(), &geometry, budget).unwrap();
         let boxes: Vec<Aabb> = stages.boxes.iter().copied().map(Aabb::from).collect();
         check_fragments(&tris, &boxes, &stages.ref_tris, budget);
 
@@ -305,9 +306,10 @@ fn trbvh_split_trees_are_valid_and_hits_equal_brute_force() {
         load_scene("cornell").unwrap(),
         load_scene("field-10k").unwrap(),
     ] {
-        let mut gpu_scene = GpuScene::upload_geometry(gpu(), &scene).unwrap();
-        builder.build(gpu(), &mut gpu_scene).unwrap();
-        let bvh = gpu_scene.download_bvh(gpu()).unwrap();
+        let geometry = Geometry::upload(gpu(), &scene).unwrap();
+        let mut tree = Tree::empty(gpu()).unwrap();
+        builder.build(gpu(), &geometry, &mut tree).unwrap();
+        let bvh = tree.download(gpu()).unwrap();
         validate_with_references(&bvh, &scene.triangles).expect("valid trbvh-split tree");
         // Reference boxes match the CPU twin only to rounding (clipping divides), which can move a
         // Morton key across a cell boundary: the trees agree in quality, not bit for bit.
@@ -326,7 +328,7 @@ fn trbvh_split_trees_are_valid_and_hits_equal_brute_force() {
         );
         let rays = test_rays(&scene.triangles, 300, 29);
         let plain: Vec<_> = rays.iter().map(|(_, r)| *r).collect();
-        let hits = closest_hits(gpu(), &gpu_scene, &plain).unwrap();
+        let hits = closest_hits(gpu(), &geometry, &tree, &plain).unwrap();
         assert_hits_match(&scene.triangles, &rays, &hits);
     }
 }
@@ -338,9 +340,9 @@ fn trbvh_split_trees_are_valid_and_hits_equal_brute_force() {
 fn zero_budget_splits_nothing() {
     let sah = SahParams::default();
     let scene = load_scene("field-10k").unwrap();
-    let gpu_scene = GpuScene::upload_geometry(gpu(), &scene).unwrap();
+    let geometry = Geometry::upload(gpu(), &scene).unwrap();
     let stages = PreSplitter::new(gpu())
-        .split_stages(gpu(), &gpu_scene, 0)
+        .split_stages(gpu(), &geometry, 0)
         .unwrap();
     let n = scene.triangles.len() as u32;
     assert_eq!(stages.ref_tris, (0..n).collect::<Vec<_>>());

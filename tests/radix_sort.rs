@@ -5,7 +5,9 @@ mod common;
 
 use common::{gpu, rng};
 use rand::Rng;
-use treelet::sort::{sort_pairs_cpu, RadixSort, TILE_SIZE};
+use treelet::gpu::constants::SORT_TILE;
+use treelet::gpu::{ItemCount, ParamSlab, Recorder};
+use treelet::sort::{sort_pairs_cpu, RadixSort};
 
 fn split(key: u64) -> [u32; 2] {
     [key as u32, (key >> 32) as u32]
@@ -80,10 +82,10 @@ fn lengths_around_tiles_and_blocks() {
 fn two_dimensional_grids() {
     // Capped at 8 workgroups per dimension, 100,000 pairs need 13 tiles (a 7x2 grid, one
     // workgroup idle) and 65,537 pairs 9 tiles (5x2, one idle): the path that more than
-    // 65,535 * TILE_SIZE pairs take under a real device limit.
+    // 65,535 * SORT_TILE pairs take under a real device limit.
     let mut sorter = RadixSort::new(gpu()).with_max_workgroups_per_dimension(8);
-    for (n, bits, seed) in [(100_000, 40, 20), (8 * TILE_SIZE as usize + 1, 17, 21)] {
-        assert!(n > 8 * TILE_SIZE as usize);
+    for (n, bits, seed) in [(100_000, 40, 20), (8 * SORT_TILE as usize + 1, 17, 21)] {
+        assert!(n > 8 * SORT_TILE as usize);
         check(&mut sorter, &random_keys(n, bits, seed), bits);
     }
 }
@@ -137,7 +139,7 @@ fn two_sorts_in_one_submission() {
     let ctx = gpu();
     let mut sorter = RadixSort::new(ctx);
     // 16 passes, then 3 (which start with a copy to the scratch buffers), then a no-op, all
-    // recorded into one encoder with one timer slot each.
+    // recorded into one recording with one timer slot each.
     let a = random_keys(20_000, 63, 60);
     let b = random_keys(30_000, 11, 61);
     let upload = |keys: &[u64]| {
@@ -152,34 +154,18 @@ fn two_sorts_in_one_submission() {
     let (kb, vb) = upload(&b);
     let (k1, v1) = upload(&[42]);
     let mut timer = treelet::gpu::GpuTimer::new(ctx, 3);
-    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    let mut params = ParamSlab::new(ctx);
+    let mut rec = Recorder::new(ctx, &mut params, Some(&mut timer));
     sorter
-        .sort(
-            ctx,
-            &mut encoder,
-            &ka,
-            &va,
-            a.len() as u32,
-            63,
-            Some(&mut timer),
-        )
+        .record(&mut rec, &ka, &va, ItemCount::Known(a.len() as u32), 63)
         .unwrap();
     sorter
-        .sort(
-            ctx,
-            &mut encoder,
-            &kb,
-            &vb,
-            b.len() as u32,
-            11,
-            Some(&mut timer),
-        )
+        .record(&mut rec, &kb, &vb, ItemCount::Known(b.len() as u32), 11)
         .unwrap();
     sorter
-        .sort(ctx, &mut encoder, &k1, &v1, 1, 63, Some(&mut timer))
+        .record(&mut rec, &k1, &v1, ItemCount::Known(1), 63)
         .unwrap();
-    timer.resolve(&mut encoder);
-    ctx.queue.submit([encoder.finish()]);
+    rec.submit();
     for (keys, kbuf, vbuf, bits) in [(&a, &ka, &va, 63), (&b, &kb, &vb, 11)] {
         let got_keys: Vec<[u32; 2]> = treelet::gpu::read_buffer(ctx, kbuf, keys.len()).unwrap();
         let got_values: Vec<u32> = treelet::gpu::read_buffer(ctx, vbuf, keys.len()).unwrap();
@@ -219,5 +205,45 @@ fn cpu_twin_matches_sort_unstable() {
         let keys = random_keys(n, bits, seed);
         let values: Vec<u32> = (0..n as u32).collect();
         assert_eq!(sort_pairs_cpu(&keys, &values, bits), expected(&keys, bits));
+    }
+}
+
+/// A pair count computed on the GPU (here written by a buffer copy in the same recording): the
+/// passes are sized for the capacity, the first `count` pairs end sorted and the pairs past them
+/// are left as they are.
+#[test]
+fn a_count_on_the_gpu_sorts_only_its_pairs() {
+    let ctx = gpu();
+    let mut sorter = RadixSort::new(ctx);
+    for (capacity, count, bits) in [(40_000usize, 29_999usize, 63), (9000, 8192, 32), (5, 2, 63)] {
+        let keys = random_keys(capacity, bits, capacity as u64);
+        let split_keys: Vec<[u32; 2]> = keys.iter().map(|&k| split(k)).collect();
+        let values: Vec<u32> = (0..capacity as u32).collect();
+        let kbuf = treelet::gpu::storage_buffer(ctx, "keys", &split_keys).unwrap();
+        let vbuf = treelet::gpu::storage_buffer(ctx, "values", &values).unwrap();
+        let source = treelet::gpu::storage_buffer(ctx, "count source", &[count as u32]).unwrap();
+        let count_buffer = treelet::gpu::storage_buffer(ctx, "count", &[0u32]).unwrap();
+        let mut params = ParamSlab::new(ctx);
+        let mut rec = Recorder::new(ctx, &mut params, None);
+        rec.encoder()
+            .copy_buffer_to_buffer(&source, 0, &count_buffer, 0, 4);
+        let len = ItemCount::OnGpu {
+            buffer: &count_buffer,
+            capacity: capacity as u32,
+        };
+        sorter.record(&mut rec, &kbuf, &vbuf, len, bits).unwrap();
+        rec.submit();
+        let got_keys: Vec<[u32; 2]> = treelet::gpu::read_buffer(ctx, &kbuf, capacity).unwrap();
+        let got_values: Vec<u32> = treelet::gpu::read_buffer(ctx, &vbuf, capacity).unwrap();
+        let got_keys: Vec<u64> = got_keys.into_iter().map(join).collect();
+        let (want_keys, want_values) = expected(&keys[..count], bits);
+        assert!(
+            got_keys[..count] == want_keys[..] && got_values[..count] == want_values[..],
+            "{count} of {capacity} pairs"
+        );
+        assert!(
+            got_keys[count..] == keys[count..] && got_values[count..] == values[count..],
+            "pairs past the count moved ({count} of {capacity})"
+        );
     }
 }

@@ -8,8 +8,9 @@ mod common;
 
 use common::gpu;
 use treelet::bvh::{build_sweep_sah, SahParams};
+use treelet::device::{Geometry, Tree};
 use treelet::scene::{load_scene, Material, Scene};
-use treelet::trace::{GpuScene, PathTracer, RenderSettings};
+use treelet::trace::{PathTracer, RenderSettings};
 
 /// Mean absolute error allowed against the reference, on 4×4 block averages. Measured on Mesa 25
 /// lavapipe: the same driver reproduces the image exactly (0.0); a render with different random
@@ -20,7 +21,8 @@ const BLOCK: u32 = 4;
 
 fn render(scene: &Scene) -> image::RgbaImage {
     let bvh = build_sweep_sah(&scene.triangles, &SahParams::default());
-    let gpu_scene = GpuScene::upload(gpu(), scene, &bvh).unwrap();
+    let geometry = Geometry::upload(gpu(), scene).unwrap();
+    let tree = Tree::upload(gpu(), &bvh).unwrap();
     let settings = RenderSettings {
         width: 96,
         height: 96,
@@ -29,7 +31,7 @@ fn render(scene: &Scene) -> image::RgbaImage {
     };
     let mut tracer = PathTracer::new(gpu(), settings).unwrap();
     tracer
-        .trace(gpu(), &gpu_scene, &scene.camera, scene.sky, 256)
+        .trace(gpu(), &geometry, &tree, &scene.camera, scene.sky, 256)
         .unwrap();
     tracer.read_image(gpu()).unwrap()
 }

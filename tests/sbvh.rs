@@ -13,8 +13,9 @@ use glam::Vec3;
 use treelet::bvh::{
     build_sbvh, build_sweep_sah, sah_cost, validate_with_references, Bvh, SahParams,
 };
+use treelet::device::{Geometry, Tree};
 use treelet::scene::{load_scene, Scene, Triangle};
-use treelet::trace::{closest_hits, GpuScene};
+use treelet::trace::closest_hits;
 
 /// A fan of `n` long thin slivers on diagonals around the z axis.
 fn fan(n: usize) -> Vec<Triangle> {
@@ -63,10 +64,11 @@ fn check_scene(scene: &Scene, per_kind: usize, seed: u64) -> Bvh {
     let stats = validate_with_references(&bvh, &scene.triangles)
         .unwrap_or_else(|e| panic!("{}: invalid sbvh: {e}", scene.name));
     assert!(stats.max_leaf_size <= params.max_leaf_size as usize);
-    let gpu_scene = GpuScene::upload(gpu(), scene, &bvh).unwrap();
+    let geometry = Geometry::upload(gpu(), scene).unwrap();
+    let tree = Tree::upload(gpu(), &bvh).unwrap();
     let rays = test_rays(&scene.triangles, per_kind, seed);
     let plain: Vec<_> = rays.iter().map(|(_, r)| *r).collect();
-    let hits = closest_hits(gpu(), &gpu_scene, &plain).unwrap();
+    let hits = closest_hits(gpu(), &geometry, &tree, &plain).unwrap();
     let ties = assert_hits_match(&scene.triangles, &rays, &hits);
     assert_cpu_traversal_matches(&bvh, &scene.triangles, &rays);
     println!(

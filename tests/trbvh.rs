@@ -15,8 +15,9 @@ use treelet::bvh::treelet::{
     TreeletLeaf, TreeletSettings, WorkingTree,
 };
 use treelet::bvh::{sah_cost, validate, Bvh, SahParams};
+use treelet::device::{Geometry, Tree};
 use treelet::scene::{load_scene, Triangle};
-use treelet::trace::{closest_hits, GpuScene};
+use treelet::trace::closest_hits;
 
 /// Every full binary tree over the leaf set `s` (bitmask), as its cost under `model`; each
 /// unordered partition once, so 7 leaves give 10,395 topologies.
@@ -126,8 +127,8 @@ fn dp_equals_brute_force_on_gpu() {
                     ..sah
                 };
                 let scene = scene_of(tris.clone());
-                let mut gpu_scene = GpuScene::upload_geometry(gpu(), &scene).unwrap();
-                let stages = builder.build_stages(gpu(), &mut gpu_scene).unwrap();
+                let geometry = Geometry::upload(gpu(), &scene).unwrap();
+                let stages = builder.build_stages(gpu(), &geometry).unwrap();
                 let leaves: Vec<TreeletLeaf> = tris
                     .iter()
                     .map(|t| {
@@ -309,9 +310,9 @@ fn check_gpu_against_cpu_with(
 ) {
     builder.sah = sah;
     let scene = scene_of(triangles);
-    let mut gpu_scene = GpuScene::upload_geometry(gpu(), &scene).unwrap();
+    let geometry = Geometry::upload(gpu(), &scene).unwrap();
     builder.settings = settings;
-    let stages = builder.build_stages(gpu(), &mut gpu_scene).unwrap();
+    let stages = builder.build_stages(gpu(), &geometry).unwrap();
     let model = CostModel::from(&sah);
     let cpu = optimize_lbvh_cpu(stages.lbvh.clone(), &settings, &model);
     let fraction = assert_optimizer_agrees(&stages.working, &cpu, &sah);
@@ -415,14 +416,18 @@ fn sah_never_increases_and_hits_equal_brute_force() {
         load_scene("field-10k").unwrap(),
         scene_of(random_soup(4000, 9)),
     ] {
-        let mut gpu_scene = GpuScene::upload_geometry(gpu(), &scene).unwrap();
+        let geometry = Geometry::upload(gpu(), &scene).unwrap();
         let mut builder = TrbvhBuilder::new(gpu(), TreeletSettings::BALANCED, sah).unwrap();
-        let stages = builder.build_stages(gpu(), &mut gpu_scene).unwrap();
+        let stages = builder.build_stages(gpu(), &geometry).unwrap();
         let lbvh = Bvh {
             nodes: stages.lbvh.nodes,
             prim_indices: stages.lbvh.prims,
         };
-        let bvh = stages.bvh;
+        // The device's own tree is traced; it is the tree the stages read back.
+        let mut tree = Tree::empty(gpu()).unwrap();
+        builder.build(gpu(), &geometry, &mut tree).unwrap();
+        let bvh = tree.download(gpu()).unwrap();
+        assert_eq!(bvh, stages.bvh, "{}: a rebuild differs", scene.name);
         validate(&bvh, &scene.triangles).unwrap();
         let (before, after) = (sah_cost(&lbvh, &sah), sah_cost(&bvh, &sah));
         println!("{}: LBVH SAH {before:.2} -> TRBVH {after:.2}", scene.name);
@@ -433,7 +438,7 @@ fn sah_never_increases_and_hits_equal_brute_force() {
         );
         let rays = test_rays(&scene.triangles, 300, 23);
         let plain: Vec<_> = rays.iter().map(|(_, r)| *r).collect();
-        let hits = closest_hits(gpu(), &gpu_scene, &plain).unwrap();
+        let hits = closest_hits(gpu(), &geometry, &tree, &plain).unwrap();
         assert_hits_match(&scene.triangles, &rays, &hits);
     }
 }
@@ -445,10 +450,11 @@ fn repeated_builds_are_identical_and_valid() {
     let sah = SahParams::default();
     let scene = scene_of(random_soup(20_000, 77));
     let expected = build_trbvh_cpu(&scene.triangles, &TreeletSettings::BALANCED, &sah);
-    let mut gpu_scene = GpuScene::upload_geometry(gpu(), &scene).unwrap();
+    let geometry = Geometry::upload(gpu(), &scene).unwrap();
+    let mut tree = Tree::empty(gpu()).unwrap();
     let mut builder = TrbvhBuilder::new(gpu(), TreeletSettings::BALANCED, sah).unwrap();
-    builder.build(gpu(), &mut gpu_scene).unwrap();
-    let first = gpu_scene.download_bvh(gpu()).unwrap();
+    builder.build(gpu(), &geometry, &mut tree).unwrap();
+    let first = tree.download(gpu()).unwrap();
     validate(&first, &scene.triangles).unwrap();
     let (got, want) = (sah_cost(&first, &sah), sah_cost(&expected, &sah));
     assert!(
@@ -456,8 +462,8 @@ fn repeated_builds_are_identical_and_valid() {
         "SAH {got} vs CPU twin {want}"
     );
     for round in 1..100 {
-        builder.build(gpu(), &mut gpu_scene).unwrap();
-        let bvh = gpu_scene.download_bvh(gpu()).unwrap();
+        builder.build(gpu(), &geometry, &mut tree).unwrap();
+        let bvh = tree.download(gpu()).unwrap();
         assert!(bvh == first, "build {round} differs from the first");
     }
 }

@@ -11,11 +11,13 @@ mod common;
 use common::{assert_hits_equal, cpu_traversal_hits, gpu, oracle_hits, rng};
 use glam::{Quat, Vec3};
 use rand::Rng;
-use treelet::bvh::{validate_with_references, Builder, GpuBuilder, SahParams};
+use treelet::bvh::{validate_with_references, Builder, SahParams, TreeUpdater, UpdateMode};
+use treelet::device::{Geometry, Tree};
 use treelet::geometry::{Hit, Ray};
 use treelet::gpu::Timing;
+use treelet::gpu::{ParamSlab, Recorder};
 use treelet::scene::{Scene, Triangle};
-use treelet::trace::{any_hits, closest_hits, GpuScene};
+use treelet::trace::{any_hits, closest_hits};
 
 /// A closed indexed mesh: shared vertices are one entry, so neighbours see bit-identical
 /// coordinates after any transform.
@@ -328,29 +330,22 @@ fn no_builder_lets_a_ray_escape() {
         .collect();
     for &builder in Builder::ALL {
         let who = builder.label();
-        // GPU builders compile their pipelines once and rebuild per mesh, as per frame.
-        let mut gpu_builder = builder
-            .is_gpu()
-            .then(|| GpuBuilder::new(gpu(), builder, &params).unwrap());
+        // Builders compile their pipelines once and rebuild per mesh, as per frame.
+        let mut updater = TreeUpdater::new(gpu(), UpdateMode::Rebuild(builder), &params).unwrap();
         for (mesh, scene, rays, oracle) in &cases {
-            let gpu_scene = match &mut gpu_builder {
-                Some(b) => {
-                    let mut s = GpuScene::upload_geometry(gpu(), scene).unwrap();
-                    b.build(gpu(), &mut s).unwrap();
-                    s
-                }
-                None => {
-                    builder
-                        .build(gpu(), scene, &params, &Timing::quick(1))
-                        .unwrap()
-                        .0
-                }
-            };
-            let bvh = gpu_scene.download_bvh(gpu()).unwrap();
+            let geometry = Geometry::upload(gpu(), scene).unwrap();
+            let mut tree = Tree::empty(gpu()).unwrap();
+            let mut slab = ParamSlab::new(gpu());
+            let mut rec = Recorder::new(gpu(), &mut slab, None);
+            updater
+                .record(&mut rec, &geometry, &scene.triangles, &mut tree)
+                .unwrap();
+            rec.submit();
+            let bvh = tree.download(gpu()).unwrap();
             validate_with_references(&bvh, &scene.triangles)
                 .unwrap_or_else(|e| panic!("{who}, {}: invalid tree: {e}", mesh.name));
             let plain: Vec<Ray> = rays.iter().map(|(_, r)| *r).collect();
-            let hits = closest_hits(gpu(), &gpu_scene, &plain).unwrap();
+            let hits = closest_hits(gpu(), &geometry, &tree, &plain).unwrap();
             let t_of = |h: &[Hit], i: usize| h[i].is_hit().then_some(h[i].t);
             assert_no_escape(mesh, rays, |i| t_of(&hits, i), &format!("GPU {who}"));
             assert_hits_equal(&scene.triangles, rays, oracle, &hits);
@@ -365,7 +360,7 @@ fn no_builder_lets_a_ray_escape() {
                     ..*r
                 })
                 .collect();
-            let any = any_hits(gpu(), &gpu_scene, &shadow).unwrap();
+            let any = any_hits(gpu(), &geometry, &tree, &shadow).unwrap();
             assert_no_escape(mesh, rays, |i| t_of(&any, i), &format!("GPU any-hit {who}"));
             let cpu_any: Vec<Hit> = shadow
                 .iter()
@@ -387,10 +382,10 @@ fn any_hit_respects_the_interval() {
     let mesh = uv_sphere(48, 16);
     let scene = scene_of(&mesh);
     let short: Vec<Ray> = mesh.rays(0.9).into_iter().map(|(_, r)| r).collect();
-    let (gpu_scene, _) = Builder::Lbvh
+    let (geometry, tree, _) = Builder::Lbvh
         .build(gpu(), &scene, &SahParams::default(), &Timing::quick(1))
         .unwrap();
-    let any = any_hits(gpu(), &gpu_scene, &short).unwrap();
+    let any = any_hits(gpu(), &geometry, &tree, &short).unwrap();
     assert!(
         any.iter().all(|h| !h.is_hit()),
         "a hit inside an empty sphere"

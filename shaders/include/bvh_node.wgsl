@@ -1,7 +1,6 @@
 // GPU twins of the Rust structs in src/bvh/node.rs, src/scene/mod.rs and src/geometry/ray.rs.
 
-const LEAF_FLAG: u32 = 0x80000000u;
-const MISS: u32 = 0xffffffffu;
+#include "constants.wgsl"
 
 // Internal: left_or_first = left child, right_or_count = right child.
 // Leaf: left_or_first = first prim_indices entry, right_or_count = LEAF_FLAG | count.

@@ -8,7 +8,6 @@
 
 const STACK_SIZE: u32 = 64u;
 const NO_ENTRY: f32 = 3.0e38;
-const BOX_EXIT_SLACK: f32 = 1.0000019;
 
 // The ray as the box test needs it.
 struct BoxRay {

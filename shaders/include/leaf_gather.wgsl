@@ -1,13 +1,12 @@
 // Gathers the primitives under a working-tree node depth-first (left first) into `gathered`,
 // mapped to triangle ids through `ref_tris` with duplicates dropped when `params.has_refs` is
-// set; returns their number. Output leaves hold at most MAX_GATHER primitives (the collapse's
-// max leaf size limit). The including kernel declares `nodes`, `prim_indices`, `ref_tris` and
+// set; returns their number. Output leaves hold at most MAX_GPU_LEAF_SIZE primitives (the
+// collapse's max leaf size limit). The including kernel declares `nodes`, `prim_indices`, `ref_tris` and
 // `params.has_refs`.
 
-const MAX_GATHER: u32 = 32u;
 const GATHER_STACK: u32 = 64u;
 
-var<private> gathered: array<u32, MAX_GATHER>;
+var<private> gathered: array<u32, MAX_GPU_LEAF_SIZE>;
 
 fn gather_leaf(root: u32) -> u32 {
     var count = 0u;
@@ -21,7 +20,7 @@ fn gather_leaf(root: u32) -> u32 {
             let end = n.left_or_first + (n.right_or_count & ~LEAF_FLAG);
             for (var k = n.left_or_first; k < end; k++) {
                 var prim = prim_indices[k];
-                var fresh = count < MAX_GATHER;
+                var fresh = count < MAX_GPU_LEAF_SIZE;
                 if params.has_refs != 0u {
                     prim = ref_tris[prim];
                     for (var j = 0u; j < count; j++) {

@@ -1,10 +1,11 @@
 // Shared by keys_histogram.wgsl and keys_scatter.wgsl (one LSD pass of `sort::RadixSort`): the
-// tile geometry, the pass parameters (binding 0), the 4-bit digit of a key and the packed
-// per-invocation digit counters. TILE and SortParams must match src/sort/radix_sort.rs.
+// tile geometry, the pass parameters (binding 0) and the pair count, the 4-bit digit of a key and
+// the packed per-invocation digit counters. SortParams must match src/sort/radix_sort.rs.
 
 const WORKGROUP: u32 = 256u;
 const ITEMS: u32 = 32u; // keys per invocation, at most 255 (byte-wide counters)
-const TILE: u32 = 8192u; // WORKGROUP * ITEMS keys per workgroup, below 2^16 (16-bit counters)
+#include "constants.wgsl"
+// SORT_TILE = WORKGROUP * ITEMS keys per workgroup, below 2^16 (16-bit counters).
 
 struct SortParams {
     n: u32,
@@ -14,6 +15,12 @@ struct SortParams {
 }
 
 @group(0) @binding(0) var<uniform> params: SortParams;
+
+// Pairs to sort: n, or fewer when the count was computed on the GPU (the including kernel
+// declares `count_limit`; see `gpu::ItemCount`). Tiles past them count and move nothing.
+fn sort_count() -> u32 {
+    return min(params.n, count_limit[0]);
+}
 
 // [w][invocation]: counts (keys_scatter: then exclusive prefixes within the segment) of digits
 // 2w (low 16 bits) and 2w + 1 (high 16 bits).

@@ -2,8 +2,7 @@
 // per axis over the scene box (cell size from its longest side, as the LBVH keys). The including
 // kernel declares `scene_bounds` (the scene box at [0], from the box reduction).
 
-const GRID: f32 = 2097152.0;
-const GRID_MAX: f32 = 2097151.0;
+#include "constants.wgsl"
 const NO_BIT: u32 = 0xffffffffu;
 
 struct SplitGrid {
@@ -18,7 +17,7 @@ fn split_grid() -> SplitGrid {
     let e = b.max - b.min;
     let extent = max(e.x, max(e.y, e.z));
     if extent > 0.0 {
-        return SplitGrid(b.min, GRID / extent, extent / GRID);
+        return SplitGrid(b.min, MORTON_GRID / extent, extent / MORTON_GRID);
     }
     return SplitGrid(b.min, 0.0, 0.0);
 }
@@ -32,8 +31,8 @@ struct CellRange {
 }
 
 fn cell_range(grid: SplitGrid, lo: vec3<f32>, hi: vec3<f32>) -> CellRange {
-    let first = clamp(floor((lo - grid.scene_min) * grid.scale), vec3<f32>(0.0), vec3<f32>(GRID_MAX));
-    let last = max(clamp(ceil((hi - grid.scene_min) * grid.scale) - 1.0, vec3<f32>(0.0), vec3<f32>(GRID_MAX)), first);
+    let first = clamp(floor((lo - grid.scene_min) * grid.scale), vec3<f32>(0.0), vec3<f32>(MORTON_GRID_MAX));
+    let last = max(clamp(ceil((hi - grid.scene_min) * grid.scale) - 1.0, vec3<f32>(0.0), vec3<f32>(MORTON_GRID_MAX)), first);
     return CellRange(vec3<u32>(first), vec3<u32>(last));
 }
 

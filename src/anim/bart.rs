@@ -9,9 +9,9 @@ use std::time::Instant;
 use glam::Vec3;
 
 use super::{check_triangle_count, AnimateStage, Animation, TimeRange};
-use crate::gpu::{GpuContext, StageTime};
+use crate::device::Geometry;
+use crate::gpu::{Recorder, StageTime};
 use crate::scene::{BartScene, Camera, Material, PointLight, Triangle};
-use crate::trace::GpuScene;
 use crate::{Error, Result};
 
 /// A BART scene evaluated per frame on the CPU.
@@ -77,15 +77,19 @@ impl Animation for BartAnimation {
 
     /// Evaluates on the CPU and uploads; the time is the wall-clock time of both (the copy to the
     /// GPU happens with the next submission, the build's).
-    fn animate(&mut self, ctx: &GpuContext, t: f32, scene: &mut GpuScene) -> Result<StageTime> {
-        check_triangle_count(self, scene)?;
+    fn animate(
+        &mut self,
+        rec: &mut Recorder<'_>,
+        t: f32,
+        geometry: &Geometry,
+    ) -> Result<Option<StageTime>> {
+        check_triangle_count(self, geometry)?;
         let start = Instant::now();
         self.scene.evaluate(t, &mut self.scratch);
-        ctx.queue
-            .write_buffer(&scene.triangles, 0, bytemuck::cast_slice(&self.scratch));
-        Ok(StageTime {
+        geometry.write_triangles(rec.ctx, &self.scratch)?;
+        Ok(Some(StageTime {
             label: "animate".into(),
             ms: Some(start.elapsed().as_secs_f64() * 1e3),
-        })
+        }))
     }
 }

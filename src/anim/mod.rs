@@ -1,7 +1,8 @@
 //! Animated scenes, rebuilt every frame: a scene source that produces its triangles for any time t
 //! with FIXED topology (the same count, order and materials every frame), and updates the
-//! triangle buffer of a `GpuScene` in place. The per-frame pipeline is animate → build the BVH on
-//! the GPU (any GPU builder, or the refit-only mode) → trace.
+//! triangles of a `device::Geometry` in place. The per-frame pipeline is animate → build the BVH
+//! on the GPU (any GPU builder, or a refit: `bvh::TreeUpdater`) → trace, recorded into one
+//! recording.
 //!
 //! Sources:
 //! * built-in procedural animations, computed by one GPU kernel each per frame
@@ -15,40 +16,34 @@
 //! * OBJ sequences (`obj_sequence`): a folder of frame OBJs with identical topology, interpolated
 //!   linearly between frames on the CPU and uploaded.
 //!
-//! `registry` names them all; `refit` is the refit-only tree update (the tree a GPU builder built
-//! at the first frame, LBVH by default, its boxes refitted on the GPU every frame) and
-//! `update_mode` chooses between it and the per-frame rebuild. `kernel` runs the animation kernels, `scene::meshes` makes the procedural
-//! geometry, `time_range` is the time axis.
+//! `registry` names them all; `kernel` runs the animation kernels, `scene::meshes` makes the
+//! procedural geometry, `time_range` is the time axis.
 
 mod bart;
-mod bodies;
-mod cloth;
-mod debris;
+mod bodies_animate;
+mod cloth_animate;
+mod debris_animate;
 mod kernel;
 mod obj_sequence;
-mod refit;
 mod registry;
 mod time_range;
-mod update_mode;
 
 pub use bart::BartAnimation;
-pub use bodies::RigidBodies;
-pub use cloth::Flag;
-pub use debris::Explosion;
+pub use bodies_animate::{RigidBodies, BODIES_ANIMATE};
+pub use cloth_animate::{Flag, CLOTH_ANIMATE};
+pub use debris_animate::{Explosion, DEBRIS_ANIMATE};
 pub use obj_sequence::ObjSequence;
-pub use refit::RefitBuilder;
 pub use registry::{
     animation_names, is_animation, load_animation, load_still, AnimationEntry, AnimationSource,
     ANIMATIONS, DEFAULT_ANIMATION,
 };
 pub use time_range::TimeRange;
-pub use update_mode::{TreeUpdater, UpdateMode};
 
 use glam::Vec3;
 
-use crate::gpu::{GpuContext, StageTime};
+use crate::device::Geometry;
+use crate::gpu::{Recorder, StageTime};
 use crate::scene::{Camera, Material, PointLight, Scene, Triangle};
-use crate::trace::GpuScene;
 use crate::{Error, Result};
 
 /// Where an animation's per-frame triangles are computed.
@@ -104,9 +99,15 @@ pub trait Animation {
     /// the GPU kernel for procedural animations, the per-frame path for the others.
     fn evaluate(&self, t: f32, out: &mut Vec<Triangle>);
 
-    /// Updates `scene.triangles` to time `t`; returns the time this took (GPU time of the kernel,
-    /// or the wall-clock time of the CPU evaluation and upload).
-    fn animate(&mut self, ctx: &GpuContext, t: f32, scene: &mut GpuScene) -> Result<StageTime>;
+    /// Updates `geometry`'s triangles to time `t`: GPU kernels record a pass "animate" into
+    /// `rec` (timestamped when it has a timer) and return None; CPU evaluations write the
+    /// triangles (landing before the recording's submission) and return their wall-clock time.
+    fn animate(
+        &mut self,
+        rec: &mut Recorder<'_>,
+        t: f32,
+        geometry: &Geometry,
+    ) -> Result<Option<StageTime>>;
 
     /// The whole scene at time `t`, on the CPU (first upload, CPU reference builders, tests).
     fn scene_at(&self, t: f32) -> Scene {
@@ -123,14 +124,14 @@ pub trait Animation {
     }
 }
 
-/// Checks that `scene` holds as many triangles as `animation` produces (fixed topology).
-fn check_triangle_count(animation: &dyn Animation, scene: &GpuScene) -> Result<()> {
+/// Checks that `geometry` holds as many triangles as `animation` produces (fixed topology).
+fn check_triangle_count(animation: &dyn Animation, geometry: &Geometry) -> Result<()> {
     let expected = animation.triangle_count();
-    if scene.triangle_count as usize != expected {
+    if geometry.triangle_count as usize != expected {
         return Err(Error::InvalidArgument(format!(
-            "animation '{}' has {expected} triangles, but the GPU scene holds {}",
+            "animation '{}' has {expected} triangles, but the geometry holds {}",
             animation.name(),
-            scene.triangle_count
+            geometry.triangle_count
         )));
     }
     Ok(())

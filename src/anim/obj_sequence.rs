@@ -16,9 +16,9 @@ use std::time::Instant;
 use glam::Vec3;
 
 use super::{check_triangle_count, AnimateStage, Animation, TimeRange};
-use crate::gpu::{GpuContext, StageTime};
+use crate::device::Geometry;
+use crate::gpu::{Recorder, StageTime};
 use crate::scene::{load_obj, Camera, Material, Triangle};
-use crate::trace::GpuScene;
 use crate::{Error, Result};
 
 /// Frames per time unit of a sequence whose file names carry no frame numbers.
@@ -185,18 +185,23 @@ impl Animation for ObjSequence {
         );
     }
 
-    fn animate(&mut self, ctx: &GpuContext, t: f32, scene: &mut GpuScene) -> Result<StageTime> {
-        check_triangle_count(self, scene)?;
+    fn animate(
+        &mut self,
+        rec: &mut Recorder<'_>,
+        t: f32,
+        geometry: &Geometry,
+    ) -> Result<Option<StageTime>> {
+        check_triangle_count(self, geometry)?;
         let start = Instant::now();
         let mut scratch = std::mem::take(&mut self.scratch);
         self.evaluate(t, &mut scratch);
-        ctx.queue
-            .write_buffer(&scene.triangles, 0, bytemuck::cast_slice(&scratch));
+        let written = geometry.write_triangles(rec.ctx, &scratch);
         self.scratch = scratch;
-        Ok(StageTime {
+        written?;
+        Ok(Some(StageTime {
             label: "animate".into(),
             ms: Some(start.elapsed().as_secs_f64() * 1e3),
-        })
+        }))
     }
 }
 

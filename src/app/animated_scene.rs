@@ -1,27 +1,44 @@
 //! An animated scene in the viewer: the animation, its clock, the time the GPU triangles show, the
 //! last animate stage's time, and the rebuild-versus-refit comparison (the companion tree and the
-//! SAH history of the plot). Each animated frame: advance the clock → animate the triangles on
-//! the GPU → (the viewer updates the traced tree) → update the companion → measure both SAHs.
+//! SAH history of the plot). Each animated frame records: advance the clock → animate the
+//! triangles on the GPU → (the viewer updates the traced tree) → update the companion → copy
+//! both trees; their SAH costs join the plot when the copies arrive, a frame or two later.
 //! A new loop of the animation starts both refits over from its first frame.
 
 use super::companion::Companion;
-use super::frame_builder::BuildTiming;
 use super::playback::{Clock, ClockRequest, Playback};
 use super::sah_history::{SahHistory, SahSample};
-use crate::anim::{AnimateStage, Animation, UpdateMode};
-use crate::bvh::{sah_cost, SahParams};
-use crate::gpu::{GpuContext, StageTime};
+use super::stats::BuildTiming;
+use super::tree_snapshot::{SnapshotCost, TreeSnapshot};
+use crate::anim::{AnimateStage, Animation};
+use crate::bvh::{SahParams, UpdateMode};
+use crate::device::{Geometry, Tree};
+use crate::gpu::{Recorder, StageTime};
 use crate::scene::Camera;
-use crate::trace::GpuScene;
 use crate::Result;
 
 /// What one clock step did to the scene.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Stepped {
     /// The triangles moved: the tree must be updated and accumulation restarted.
     pub moved: bool,
     /// The animation looped: refits start over from this frame.
     pub looped: bool,
+    /// A CPU evaluation's time (GPU kernels are timestamped in the recording).
+    pub cpu_time: Option<StageTime>,
+}
+
+/// The label prefix of the companion's build passes in the frame's recording.
+pub const COMPANION_PREFIX: &str = "companion ";
+
+/// Both trees of one animated frame, being read back for the plot.
+struct PendingSample {
+    t: f32,
+    traced_is_refit: bool,
+    traced: TreeSnapshot,
+    companion: TreeSnapshot,
+    traced_cost: Option<SnapshotCost>,
+    companion_cost: Option<SnapshotCost>,
 }
 
 pub struct AnimatedScene {
@@ -33,6 +50,9 @@ pub struct AnimatedScene {
     companion: Option<Companion>,
     pub companion_timing: Option<BuildTiming>,
     pub history: SahHistory,
+    pending: Option<PendingSample>,
+    /// Snapshots whose reads finished, kept for reuse.
+    spare: Vec<TreeSnapshot>,
 }
 
 impl AnimatedScene {
@@ -45,6 +65,8 @@ impl AnimatedScene {
             companion: None,
             companion_timing: None,
             history: SahHistory::default(),
+            pending: None,
+            spare: Vec::new(),
         }
     }
 
@@ -57,18 +79,20 @@ impl AnimatedScene {
         self.animation.camera(self.clock.t())
     }
 
-    /// Advances the clock and animates `scene`'s triangles to the new time when they show another.
+    /// Advances the clock and records the animation of `geometry`'s triangles to the new time
+    /// when they show another.
     pub fn step(
         &mut self,
-        ctx: &GpuContext,
+        rec: &mut Recorder<'_>,
         playback: &mut Playback,
         request: ClockRequest,
         dt: f32,
-        scene: &mut GpuScene,
+        geometry: &Geometry,
     ) -> Result<Stepped> {
         let looped = self.clock.advance(playback, request, dt);
         if looped {
             self.history.clear();
+            self.pending = None;
             if let Some(companion) = &mut self.companion {
                 companion.reset_topology();
             }
@@ -78,38 +102,38 @@ impl AnimatedScene {
             return Ok(Stepped {
                 moved: false,
                 looped,
+                cpu_time: None,
             });
         }
-        self.animate_time = Some(self.animation.animate(ctx, t, scene)?);
+        let cpu_time = self.animation.animate(rec, t, geometry)?;
         self.shown = Some(t);
         Ok(Stepped {
             moved: true,
             looped,
+            cpu_time,
         })
     }
 
-    /// After the traced tree was updated by `traced_mode` for the current triangles: updates the
-    /// companion tree and records both trees' SAH cost at the current time. Returns the traced
-    /// tree's SAH cost and leaf count.
-    pub fn compare(
+    /// After the traced tree was updated by `traced_mode` in `rec`: records the companion
+    /// tree's update and copies of both trees, for the plot (`poll`). Skipped while the previous
+    /// frame's copies are still in flight.
+    pub fn record_comparison(
         &mut self,
-        ctx: &GpuContext,
+        rec: &mut Recorder<'_>,
         traced_mode: UpdateMode,
-        traced: &GpuScene,
+        geometry: &Geometry,
+        traced: &Tree,
         params: &SahParams,
-    ) -> Result<(f32, usize)> {
-        let bvh = traced.download_bvh(ctx)?;
-        let traced_cost = sah_cost(&bvh, params);
+    ) -> Result<()> {
         let Some(mode) = Companion::mode_for(traced_mode) else {
             self.drop_companion();
-            return Ok((traced_cost, bvh.leaf_count()));
+            return Ok(());
         };
-        if self
-            .companion
-            .as_ref()
-            .is_none_or(|c| c.mode() != mode || !c.shares(traced))
-        {
-            self.companion = Some(Companion::new(ctx, mode, traced, params)?);
+        if self.pending.is_some() {
+            return Ok(());
+        }
+        if self.companion.as_ref().is_none_or(|c| c.mode() != mode) {
+            self.companion = Some(Companion::new(rec.ctx, mode, params)?);
             let (rebuild, refit) = if traced_mode.is_refit() {
                 (mode, traced_mode)
             } else {
@@ -118,24 +142,64 @@ impl AnimatedScene {
             self.history = SahHistory::new(format!("rebuild ({})", rebuild.label()), refit.label());
         }
         let companion = self.companion.as_mut().expect("created above");
-        self.companion_timing = Some(companion.update(ctx, params)?);
-        let other = companion.sah(ctx, params)?;
-        let (rebuild, refit) = if traced_mode.is_refit() {
-            (other, traced_cost)
+        rec.set_pass_prefix(COMPANION_PREFIX);
+        let recorded = companion.record(rec, geometry, &[], params);
+        rec.set_pass_prefix("");
+        recorded?;
+        let traced_copy = TreeSnapshot::record(rec, traced, self.spare.pop());
+        let companion_copy = TreeSnapshot::record(rec, &companion.tree, self.spare.pop());
+        self.pending = Some(PendingSample {
+            t: self.clock.t(),
+            traced_is_refit: traced_mode.is_refit(),
+            traced: traced_copy,
+            companion: companion_copy,
+            traced_cost: None,
+            companion_cost: None,
+        });
+        Ok(())
+    }
+
+    /// After the frame was submitted: starts reading the copies.
+    pub fn submitted(&mut self) {
+        if let Some(p) = &mut self.pending {
+            p.traced.submitted();
+            p.companion.submitted();
+        }
+    }
+
+    /// Adds the plot sample of a finished comparison; returns the traced tree's cost.
+    pub fn poll(&mut self, params: &SahParams) -> Result<Option<SnapshotCost>> {
+        let Some(p) = &mut self.pending else {
+            return Ok(None);
+        };
+        if p.traced_cost.is_none() {
+            p.traced_cost = p.traced.try_cost(params).transpose()?;
+        }
+        if p.companion_cost.is_none() {
+            p.companion_cost = p.companion.try_cost(params).transpose()?;
+        }
+        let (Some(traced), Some(other)) = (p.traced_cost, p.companion_cost) else {
+            return Ok(None);
+        };
+        let p = self.pending.take().expect("checked above");
+        let (rebuild, refit) = if p.traced_is_refit {
+            (other.cost, traced.cost)
         } else {
-            (traced_cost, other)
+            (traced.cost, other.cost)
         };
         self.history.push(SahSample {
-            t: self.clock.t(),
+            t: p.t,
             rebuild,
             refit,
         });
-        Ok((traced_cost, bvh.leaf_count()))
+        self.spare.extend([p.traced, p.companion]);
+        Ok(Some(traced))
     }
 
     /// Stops comparing (the companion tree is freed, the plot kept).
     pub fn drop_companion(&mut self) {
         self.companion = None;
         self.companion_timing = None;
+        self.pending = None;
     }
 }

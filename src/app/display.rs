@@ -6,6 +6,9 @@ use bytemuck::{Pod, Zeroable};
 
 use crate::gpu::{bind_entry, shader_source, uniform_buffer, GpuContext};
 
+/// The render shader (vertex and fragment), the one WGSL file that is no compute kernel.
+pub const DISPLAY_SHADER: &str = include_str!("../../shaders/image_display.wgsl");
+
 /// A rectangle of the render target in physical pixels.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct PixelRect {
@@ -59,7 +62,7 @@ impl ImageDisplay {
             .device
             .create_shader_module(wgpu::ShaderModuleDescriptor {
                 label: Some("image_display.wgsl"),
-                source: wgpu::ShaderSource::Wgsl(shader_source("image_display.wgsl").into()),
+                source: wgpu::ShaderSource::Wgsl(shader_source(DISPLAY_SHADER).into()),
             });
         let pipeline = ctx
             .device

@@ -5,8 +5,9 @@
 //!
 //! Files: `options` (what the command line asks for), `window_app` (the winit application: window,
 //! surface, device, egui, drawing and presenting), `surface` (swap-chain configuration), `viewer`
-//! (the per-frame pipeline and its state), `frame_builder` (per-frame BVH rebuilds with any
-//! builder, or refits), `animated_scene` (an animated scene's clock, animate step and the
+//! (the per-frame pipeline and its state, recorded into one submission per frame),
+//! `frame_readback` and `tree_snapshot` (statistics and trees read back without waiting),
+//! `animated_scene` (an animated scene's clock, animate step and the
 //! rebuild-versus-refit comparison), `playback` (the animation clock and its controls), `companion`
 //! (the second tree of the comparison), `sah_history` (its SAH-over-time plot), `sah_reference`
 //! (the CPU sweep-SAH anchor, in a background thread), `camera_control` (orbit, zoom, fly),
@@ -18,7 +19,7 @@ mod animated_scene;
 mod camera_control;
 mod companion;
 mod display;
-mod frame_builder;
+mod frame_readback;
 mod options;
 mod panel;
 mod playback;
@@ -29,8 +30,10 @@ mod settings;
 mod stats;
 mod surface;
 mod tradeoff_panel;
+mod tree_snapshot;
 mod viewer;
 mod window_app;
 
+pub use display::DISPLAY_SHADER;
 pub use options::{default_update_mode, ViewerOptions};
 pub use window_app::run;

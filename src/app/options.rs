@@ -3,9 +3,9 @@
 
 use std::path::PathBuf;
 
-use crate::anim::UpdateMode;
 use crate::bvh::treelet::TreeletSettings;
 use crate::bvh::Builder;
+use crate::bvh::UpdateMode;
 use crate::gpu::GpuOptions;
 
 #[derive(Clone, Debug)]

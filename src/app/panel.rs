@@ -6,14 +6,15 @@
 
 use egui::{Color32, RichText};
 
-use super::frame_builder::BuildTiming;
 use super::playback::{Clock, ClockRequest, Playback};
 use super::sah_history::SahHistory;
 use super::sah_reference::ReferenceState;
 use super::settings::ViewSettings;
+use super::stats::BuildTiming;
 use super::stats::FrameStats;
-use crate::anim::{AnimateStage, UpdateMode, ANIMATIONS};
+use crate::anim::{AnimateStage, ANIMATIONS};
 use crate::bvh::Builder;
+use crate::bvh::UpdateMode;
 use crate::scene::SCENES;
 
 /// Width of the panel in points.

@@ -1,8 +1,8 @@
 //! The viewer's user-adjustable settings (builder or refit mode, leaf size, samples per frame,
 //! bounces, per-frame rebuild). Any change to them restarts accumulation.
 
-use crate::anim::UpdateMode;
 use crate::bvh::SahParams;
+use crate::bvh::UpdateMode;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ViewSettings {

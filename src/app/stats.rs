@@ -5,8 +5,30 @@
 use std::collections::VecDeque;
 use std::time::Instant;
 
-use super::frame_builder::BuildTiming;
+use crate::gpu::{aggregate_stages, StageTime};
 use crate::trace::TraceStats;
+
+/// One build's timings: per-stage GPU times (aggregated by label) and the total.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct BuildTiming {
+    pub stages: Vec<StageTime>,
+    /// Sum of the stage times; wall-clock time where the device has no timestamps.
+    pub total_ms: f64,
+    /// Whether `total_ms` comes from GPU timestamps (false: wall clock or CPU time).
+    pub timestamped: bool,
+}
+
+impl BuildTiming {
+    /// The timing of GPU `stages` that took `wall_ms` on the wall clock.
+    pub fn from_stages(stages: Vec<StageTime>, wall_ms: f64) -> Self {
+        let gpu_ms: Option<f64> = stages.iter().map(|s| s.ms).sum();
+        Self {
+            stages: aggregate_stages(stages),
+            total_ms: gpu_ms.unwrap_or(wall_ms),
+            timestamped: gpu_ms.is_some(),
+        }
+    }
+}
 
 /// Frames kept for the frame-time plot.
 pub const HISTORY: usize = 240;

@@ -6,9 +6,16 @@
 //!
 //! Accumulation goes on while nothing changes and restarts on any change (camera, settings, scene,
 //! window size, and every animated frame). Animated scenes (`crate::anim`) move their triangles on
-//! the GPU in the animate step (`animated_scene`), then the tree is rebuilt (or refitted) in place. User errors (an unloadable file, a scene too large for the device) are shown in
-//! the panel; the previous scene stays and the viewer keeps running. Displaying the image and the
-//! panel is `window_app`'s part.
+//! the GPU in the animate step (`animated_scene`), then the tree is rebuilt (or refitted) in place.
+//!
+//! A frame is recorded, not waited for: animate, build, trace and tonemap go into one recording
+//! and one submission. The frame's statistics (stage times, rays, tree size) and the trees' SAH
+//! costs are read back without waiting and shown a frame or two late (`frame_readback`,
+//! `tree_snapshot`). What still waits for the GPU, off the per-frame path: loading a scene (its
+//! first build), deriving a refit's links once per topology, screenshots, and the trade-off
+//! window's measurements. User errors (an unloadable file, a scene too large for the device) are
+//! shown in the panel; the previous scene stays and the viewer keeps running. Displaying the
+//! image and the panel is `window_app`'s part.
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -16,19 +23,21 @@ use std::time::Instant;
 use super::animated_scene::AnimatedScene;
 use super::camera_control::CameraInput;
 use super::display::PixelRect;
-use super::frame_builder::{BuildTiming, FrameBuilder};
+use super::frame_readback::{FrameReadback, FrameRecord, FrameResult};
 use super::options::{default_update_mode, ViewerOptions};
 use super::panel::{self, AnimationInfo, PanelActions, PanelControls, PanelInfo, SAH_INTERVAL_S};
 use super::playback::{ClockRequest, Playback};
 use super::sah_reference::{ReferenceKey, SahReference};
 use super::settings::ViewSettings;
-use super::stats::{FrameStats, TreeSah};
+use super::stats::{BuildTiming, FrameStats, TreeSah};
 use super::tradeoff_panel::{StudyScene, TradeoffPanel};
-use crate::anim::{is_animation, load_animation, UpdateMode};
-use crate::bvh::{sah_cost, Builder};
-use crate::gpu::GpuContext;
+use super::tree_snapshot::TreeSnapshot;
+use crate::anim::{is_animation, load_animation};
+use crate::bvh::{Builder, TreeUpdater, UpdateMode};
+use crate::device::{Geometry, Tree};
+use crate::gpu::{GpuContext, ParamSlab, Recorder};
 use crate::scene::{load_scene, Camera, Scene};
-use crate::trace::{GpuScene, PathTracer, RenderSettings};
+use crate::trace::{PathTracer, RenderSettings};
 use crate::Result;
 
 /// The current tree's SAH needs measuring: now (a new tree) or when the interval has passed
@@ -45,8 +54,11 @@ pub struct Viewer {
     /// Incremented on every scene load (keys the SAH reference).
     scene_id: u64,
     scene_radius: f32,
-    gpu_scene: GpuScene,
-    builder: FrameBuilder,
+    geometry: Geometry,
+    tree: Tree,
+    /// (nodes, references) of the traced tree, as last read back.
+    tree_counts: (u32, u32),
+    updater: TreeUpdater,
     /// The tree no longer matches the settings or the geometry: build before tracing.
     tree_dirty: bool,
     sah_due: SahDue,
@@ -68,6 +80,13 @@ pub struct Viewer {
     animated: Option<AnimatedScene>,
     /// The triangles or the tree changed since the rebuild-versus-refit comparison last ran.
     compare_due: bool,
+    /// Parameters of the frame's recording.
+    params: ParamSlab,
+    /// The frames' statistics on their way back.
+    frame_readback: FrameReadback,
+    /// A copy of the traced tree on its way back for its SAH cost.
+    sah_snapshot: Option<TreeSnapshot>,
+    sah_pending: bool,
 }
 
 impl Viewer {
@@ -77,15 +96,17 @@ impl Viewer {
             .builder
             .unwrap_or_else(|| default_update_mode(ctx.info.device_type));
         let settings = ViewSettings::new(mode_for_scene(&options.scene, requested));
-        let mut builder = FrameBuilder::new(ctx, settings.builder)?;
-        let loaded = load_and_build(ctx, &options.scene, &mut builder, &settings)?;
+        let mut updater = TreeUpdater::new(ctx, settings.builder, &settings.sah_params())?;
+        let loaded = load_and_build(ctx, &options.scene, &mut updater)?;
         let mut viewer = Self {
             scene_radius: scene_radius(&loaded.scene),
             camera: loaded.scene.camera,
             scene: loaded.scene,
             scene_id: 0,
-            gpu_scene: loaded.gpu_scene,
-            builder,
+            geometry: loaded.geometry,
+            tree_counts: loaded.tree.counts(ctx)?,
+            tree: loaded.tree,
+            updater,
             tree_dirty: false,
             sah_due: SahDue::Now,
             tracer: None,
@@ -105,6 +126,10 @@ impl Viewer {
             tradeoff: TradeoffPanel::default(),
             animated: loaded.animated,
             compare_due: true,
+            params: ParamSlab::new(ctx),
+            frame_readback: FrameReadback::new(ctx),
+            sah_snapshot: None,
+            sah_pending: false,
         };
         viewer.stats.build = Some(loaded.timing);
         viewer.request_reference();
@@ -128,9 +153,9 @@ impl Viewer {
             adapter,
             stats: &self.stats,
             scene_name: &self.scene.name,
-            triangles: self.gpu_scene.triangle_count,
-            nodes: self.gpu_scene.node_count,
-            references: self.gpu_scene.prim_count,
+            triangles: self.geometry.triangle_count,
+            nodes: self.tree_counts.0,
+            references: self.tree_counts.1,
             samples: self.tracer.as_ref().map_or(0, |t| t.samples_done()),
             resolution: (width, height),
             reference: self.reference.state(),
@@ -158,9 +183,11 @@ impl Viewer {
         actions
     }
 
-    /// Applies the panel's actions and settings, then animates, builds and traces one frame.
+    /// Applies the panel's actions and settings, then records one frame (animate, build, trace,
+    /// tonemap) and submits it; takes in the statistics of earlier frames that have arrived.
     pub fn update(&mut self, ctx: &GpuContext, actions: PanelActions) {
         self.reference.poll();
+        self.take_readbacks(ctx);
         if let Some(name) = actions.load_scene {
             self.load(ctx, &name);
         }
@@ -174,14 +201,29 @@ impl Viewer {
         if self.halted {
             return;
         }
-        if self.animate(ctx, actions.clock) {
-            self.tree_dirty = true;
-            self.restart_accumulation = true;
+        let start = Instant::now();
+        let mut record = FrameRecord::default();
+        let mut timer = self.frame_readback.begin();
+        let mut params = std::mem::replace(&mut self.params, ParamSlab::new(ctx));
+        let mut rec = Recorder::new(ctx, &mut params, timer.as_mut());
+        let outcome = self.record_frame(&mut rec, actions.clock, &mut record);
+        record.wall_ms = start.elapsed().as_secs_f64() * 1e3;
+        let counters = self.tracer.as_ref().map(|t| t.counters().clone());
+        self.frame_readback
+            .record(&mut rec, counters.as_ref(), &self.tree.counts, record);
+        rec.submit();
+        self.params = params;
+        self.frame_readback.submitted(timer);
+        if let Some(animated) = &mut self.animated {
+            animated.submitted();
         }
-        self.build(ctx);
-        self.compare(ctx);
-        self.measure_sah(ctx);
-        self.trace(ctx);
+        if let Some(snapshot) = self.sah_snapshot.as_mut().filter(|_| self.sah_pending) {
+            snapshot.submitted();
+        }
+        if let Err(e) = outcome {
+            self.error = Some(e);
+            self.halted = true;
+        }
         let study = StudyScene {
             scene: &self.scene,
             scene_id: self.scene_id,
@@ -192,12 +234,100 @@ impl Viewer {
         self.tradeoff.step(ctx, &study);
     }
 
-    /// The animation step of the frame loop: advances the clock of an animated scene and moves its
-    /// triangles on the GPU. Returns whether they moved (the tree is then rebuilt or refitted and
-    /// accumulation restarts). Static scenes never move.
-    fn animate(&mut self, ctx: &GpuContext, request: ClockRequest) -> bool {
+    /// The frame's work, in order, into `rec`: animate → build → compare → measure → trace →
+    /// tonemap. Errors stop the frame with a message for the panel.
+    fn record_frame(
+        &mut self,
+        rec: &mut Recorder<'_>,
+        clock: ClockRequest,
+        record: &mut FrameRecord,
+    ) -> std::result::Result<(), String> {
+        if self.animate(rec, clock, record)? {
+            self.tree_dirty = true;
+            self.restart_accumulation = true;
+        }
+        self.build(rec, record)?;
+        self.compare(rec)?;
+        self.measure_sah(rec);
+        self.trace(rec, record)?;
+        Ok(())
+    }
+
+    /// Takes in what the GPU has finished: frames' statistics, the comparison's SAH costs, the
+    /// traced tree's SAH cost.
+    fn take_readbacks(&mut self, ctx: &GpuContext) {
+        // Non-blocking: runs the callbacks of readbacks that are done.
+        let _ = ctx.device.poll(wgpu::PollType::Poll);
+        for result in self.frame_readback.poll(ctx) {
+            self.take_frame_result(result);
+        }
+        let params = self.applied.sah_params();
+        if let Some(animated) = &mut self.animated {
+            match animated.poll(&params) {
+                Ok(Some(traced)) => {
+                    self.stats.tree_sah = Some(TreeSah {
+                        cost: traced.cost,
+                        leaves: traced.leaves,
+                        measured: Instant::now(),
+                    });
+                }
+                Ok(None) => {}
+                Err(e) => self.error = Some(format!("rebuild/refit comparison failed: {e}")),
+            }
+        }
+        if self.sah_pending {
+            if let Some(cost) = self.sah_snapshot.as_mut().and_then(|s| s.try_cost(&params)) {
+                self.sah_pending = false;
+                match cost {
+                    Ok(c) => {
+                        self.stats.tree_sah = Some(TreeSah {
+                            cost: c.cost,
+                            leaves: c.leaves,
+                            measured: Instant::now(),
+                        })
+                    }
+                    Err(e) => self.error = Some(format!("cannot read the tree back: {e}")),
+                }
+            }
+        }
+    }
+
+    fn take_frame_result(&mut self, result: FrameResult) {
+        if let Some(build) = result.build {
+            self.stats.build = Some(build);
+        }
+        if let Some(trace) = result.trace {
+            self.stats.trace = Some(trace);
+        }
+        if let Some(animated) = &mut self.animated {
+            if let Some(time) = result.animate {
+                animated.animate_time = Some(time);
+            }
+            if let Some(timing) = result.companion {
+                animated.companion_timing = Some(timing);
+            }
+        }
+        self.tree_counts = result.tree_counts;
+        if result.overflows > 0 {
+            self.error = Some(format!(
+                "{} paths overflowed the traversal stack (tree deeper than the kernel supports)",
+                result.overflows
+            ));
+            self.halted = true;
+        }
+    }
+
+    /// The animation step of the frame: advances the clock of an animated scene and records the
+    /// move of its triangles. Returns whether they moved (the tree is then rebuilt or refitted
+    /// and accumulation restarts). Static scenes never move.
+    fn animate(
+        &mut self,
+        rec: &mut Recorder<'_>,
+        request: ClockRequest,
+        record: &mut FrameRecord,
+    ) -> std::result::Result<bool, String> {
         let Some(animated) = self.animated.as_mut() else {
-            return false;
+            return Ok(false);
         };
         let dt = self
             .stats
@@ -205,64 +335,52 @@ impl Viewer {
             .back()
             .map_or(0.0, |ms| (ms * 1e-3) as f32);
         let playback = &mut self.controls.playback;
-        match animated.step(ctx, playback, request, dt, &mut self.gpu_scene) {
-            Ok(stepped) => {
-                if stepped.looped {
-                    // Refits start over from the first frame of each loop.
-                    self.builder.reset_topology();
-                }
-                if stepped.moved {
-                    if playback.follow_camera {
-                        self.camera = animated.camera();
-                    }
-                    self.compare_due = true;
-                }
-                stepped.moved
-            }
-            Err(e) => {
-                self.error = Some(format!("animation failed: {e}"));
-                self.halted = true;
-                false
-            }
+        let stepped = animated
+            .step(rec, playback, request, dt, &self.geometry)
+            .map_err(|e| format!("animation failed: {e}"))?;
+        if stepped.looped {
+            // Refits start over from the first frame of each loop.
+            self.updater.reset();
         }
+        if stepped.moved {
+            if playback.follow_camera {
+                self.camera = animated.camera();
+            }
+            self.compare_due = true;
+            record.animated = true;
+            record.animate_cpu = stepped.cpu_time;
+        }
+        Ok(stepped.moved)
     }
 
-    /// Animated scenes with the comparison on: after the traced tree was updated, updates the
-    /// second tree and records both SAH costs for the plot (this also measures the traced tree).
-    fn compare(&mut self, ctx: &GpuContext) {
+    /// Animated scenes with the comparison on: after the traced tree was updated, records the
+    /// second tree's update and copies of both trees for the SAH plot.
+    fn compare(&mut self, rec: &mut Recorder<'_>) -> std::result::Result<(), String> {
         let Some(animated) = self.animated.as_mut() else {
-            return;
+            return Ok(());
         };
         if !self.controls.playback.compare {
             animated.drop_companion();
-            return;
+            return Ok(());
         }
         if !self.compare_due {
-            return;
+            return Ok(());
         }
         self.compare_due = false;
         let params = self.applied.sah_params();
-        match animated.compare(ctx, self.applied.builder, &self.gpu_scene, &params) {
-            Ok((cost, leaves)) => {
-                self.stats.tree_sah = Some(TreeSah {
-                    cost,
-                    leaves,
-                    measured: Instant::now(),
-                });
-                self.sah_due = SahDue::No;
-            }
-            Err(e) => {
-                self.error = Some(format!("rebuild/refit comparison failed: {e}"));
-                self.controls.playback.compare = false;
-            }
+        let recorded = animated.record_comparison(
+            rec,
+            self.applied.builder,
+            &self.geometry,
+            &self.tree,
+            &params,
+        );
+        if let Err(e) = recorded {
+            self.controls.playback.compare = false;
+            return Err(format!("rebuild/refit comparison failed: {e}"));
         }
-    }
-
-    /// Records the tonemap of the accumulated image (for `image`) into `encoder`.
-    pub fn record_tonemap(&self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder) {
-        if let Some(tracer) = self.displayable_tracer() {
-            tracer.tonemap(ctx, encoder);
-        }
+        self.sah_due = SahDue::No;
+        Ok(())
     }
 
     /// The tonemapped pixels and where to show them, once something has been traced at the
@@ -296,7 +414,7 @@ impl Viewer {
         });
         format!(
             "viewer: {} on {}: {} frames, {frame}, {mrays} Mrays/s, {spp} spp at {width}x{height}",
-            self.builder.builder().name(),
+            self.updater.mode().name(),
             self.scene.name,
             self.stats.frames
         )
@@ -319,9 +437,9 @@ impl Viewer {
         self.error = None;
         let mode = mode_for_scene(name, self.applied.builder);
         if mode != self.applied.builder {
-            match FrameBuilder::new(ctx, mode) {
-                Ok(builder) => {
-                    self.builder = builder;
+            match TreeUpdater::new(ctx, mode, &self.applied.sah_params()) {
+                Ok(updater) => {
+                    self.updater = updater;
                     self.applied.select_builder(mode);
                     self.controls.settings.select_builder(mode);
                 }
@@ -331,7 +449,7 @@ impl Viewer {
                 }
             }
         }
-        match load_and_build(ctx, name, &mut self.builder, &self.applied) {
+        match load_and_build(ctx, name, &mut self.updater) {
             Ok(loaded) => {
                 log::info!(
                     "viewer: loaded {} ({} triangles)",
@@ -342,7 +460,10 @@ impl Viewer {
                 self.scene_radius = scene_radius(&loaded.scene);
                 self.scene = loaded.scene;
                 self.scene_id += 1;
-                self.gpu_scene = loaded.gpu_scene;
+                self.tree_counts = loaded.tree.counts(ctx).unwrap_or_default();
+                self.geometry = loaded.geometry;
+                self.tree = loaded.tree;
+                self.sah_pending = false;
                 self.stats.build = Some(loaded.timing);
                 self.stats.tree_sah = None;
                 self.tree_dirty = false;
@@ -367,9 +488,9 @@ impl Viewer {
         }
         self.error = None;
         if wanted.builder != self.applied.builder {
-            match FrameBuilder::new(ctx, wanted.builder) {
-                Ok(builder) => {
-                    self.builder = builder;
+            match TreeUpdater::new(ctx, wanted.builder, &wanted.sah_params()) {
+                Ok(updater) => {
+                    self.updater = updater;
                     self.tree_dirty = true;
                 }
                 Err(e) => {
@@ -381,7 +502,7 @@ impl Viewer {
         }
         if wanted.max_leaf_size != self.applied.max_leaf_size {
             self.tree_dirty = true;
-            self.builder.reset_topology();
+            self.updater.reset();
         }
         self.applied = wanted;
         self.request_reference();
@@ -429,38 +550,43 @@ impl Viewer {
         }
     }
 
-    fn build(&mut self, ctx: &GpuContext) {
+    /// Records the tree's rebuild or refit when it is due.
+    fn build(
+        &mut self,
+        rec: &mut Recorder<'_>,
+        record: &mut FrameRecord,
+    ) -> std::result::Result<(), String> {
         if !(self.tree_dirty || self.applied.rebuilds_every_frame()) {
-            return;
+            return Ok(());
         }
-        let params = self.applied.sah_params();
-        match self
-            .builder
-            .build(ctx, &self.scene, &params, &mut self.gpu_scene)
-        {
-            Ok(timing) => {
-                self.stats.build = Some(timing);
-                self.sah_due = if self.tree_dirty {
+        self.updater.set_sah_params(self.applied.sah_params());
+        let triangles = match &self.animated {
+            // CPU reference builders are not offered for animated scenes (GPU modes only).
+            Some(_) => Vec::new(),
+            None => self.scene.triangles.clone(),
+        };
+        let built = self
+            .updater
+            .record(rec, &self.geometry, &triangles, &mut self.tree);
+        self.tree_dirty = false;
+        match built {
+            Ok(cpu_time) => {
+                record.built = true;
+                record.build_cpu = cpu_time;
+                self.sah_due = if self.sah_due == SahDue::Now || !record.animated {
                     SahDue::Now
                 } else {
                     self.sah_due.max_periodic()
                 };
-                self.tree_dirty = false;
+                Ok(())
             }
-            Err(e) => {
-                self.error = Some(format!(
-                    "{} build failed: {e}",
-                    self.builder.builder().name()
-                ));
-                self.tree_dirty = false;
-                self.halted = true;
-            }
+            Err(e) => Err(format!("{} build failed: {e}", self.updater.mode().name())),
         }
     }
 
-    /// Downloads the tree and computes its SAH when it is new, or periodically while it is
-    /// rebuilt (downloading it every frame would dominate the frame time on large scenes).
-    fn measure_sah(&mut self, ctx: &GpuContext) {
+    /// Records a copy of the tree for its SAH cost when it is new, or periodically while it is
+    /// rebuilt (the copy is read a frame or two later; one at a time).
+    fn measure_sah(&mut self, rec: &mut Recorder<'_>) {
         let due = match self.sah_due {
             SahDue::No => false,
             SahDue::Now => true,
@@ -469,43 +595,44 @@ impl Viewer {
                 .tree_sah
                 .is_none_or(|s| s.measured.elapsed().as_secs_f64() >= SAH_INTERVAL_S),
         };
-        if !due {
+        if !due || self.sah_pending {
             return;
         }
         self.sah_due = SahDue::No;
-        match self.gpu_scene.download_bvh(ctx) {
-            Ok(bvh) => {
-                self.stats.tree_sah = Some(TreeSah {
-                    cost: sah_cost(&bvh, &self.applied.sah_params()),
-                    leaves: bvh.leaf_count(),
-                    measured: Instant::now(),
-                });
-            }
-            Err(e) => self.error = Some(format!("cannot read the tree back: {e}")),
-        }
+        self.sah_snapshot = Some(TreeSnapshot::record(
+            rec,
+            &self.tree,
+            self.sah_snapshot.take(),
+        ));
+        self.sah_pending = true;
     }
 
-    fn trace(&mut self, ctx: &GpuContext) {
+    /// Records the frame's samples and the tonemap.
+    fn trace(
+        &mut self,
+        rec: &mut Recorder<'_>,
+        record: &mut FrameRecord,
+    ) -> std::result::Result<(), String> {
         let Some(tracer) = self.tracer.as_mut() else {
-            return;
+            return Ok(());
         };
         if self.restart_accumulation {
-            tracer.reset(ctx);
+            tracer.reset();
             self.restart_accumulation = false;
         }
-        match tracer.trace(
-            ctx,
-            &self.gpu_scene,
-            &self.camera,
-            self.scene.sky,
-            self.applied.samples_per_frame,
-        ) {
-            Ok(stats) => self.stats.trace = Some(stats),
-            Err(e) => {
-                self.error = Some(format!("trace failed: {e}"));
-                self.halted = true;
-            }
-        }
+        let recorded = tracer
+            .record(
+                rec,
+                &self.geometry,
+                &self.tree,
+                &self.camera,
+                self.scene.sky,
+                self.applied.samples_per_frame,
+            )
+            .map_err(|e| format!("trace failed: {e}"))?;
+        record.trace = Some(recorded);
+        tracer.record_tonemap(rec);
+        Ok(())
     }
 }
 
@@ -523,7 +650,8 @@ impl SahDue {
 struct LoadedScene {
     /// A static scene, or an animated one at its start time.
     scene: Arc<Scene>,
-    gpu_scene: GpuScene,
+    geometry: Geometry,
+    tree: Tree,
     timing: BuildTiming,
     animated: Option<AnimatedScene>,
 }
@@ -539,13 +667,9 @@ fn mode_for_scene(name: &str, mode: UpdateMode) -> UpdateMode {
     }
 }
 
-/// Loads `name` (a static or an animated scene), uploads it and builds its tree with `builder`.
-fn load_and_build(
-    ctx: &GpuContext,
-    name: &str,
-    builder: &mut FrameBuilder,
-    settings: &ViewSettings,
-) -> Result<LoadedScene> {
+/// Loads `name` (a static or an animated scene), uploads it and builds its first tree with
+/// `updater` (waiting for it: loading is not on the per-frame path).
+fn load_and_build(ctx: &GpuContext, name: &str, updater: &mut TreeUpdater) -> Result<LoadedScene> {
     let (scene, animated) = if is_animation(name) {
         let animation = load_animation(name)?;
         let scene = animation.scene_at(animation.time_range().start);
@@ -554,12 +678,23 @@ fn load_and_build(
         (load_scene(name)?, None)
     };
     let scene = Arc::new(scene);
-    let mut gpu_scene = GpuScene::upload_geometry(ctx, &scene)?;
-    let timing = builder.build(ctx, &scene, &settings.sah_params(), &mut gpu_scene)?;
+    let geometry = Geometry::upload(ctx, &scene)?;
+    let mut tree = Tree::empty(ctx)?;
+    let mut timer = crate::gpu::GpuTimer::new(ctx, updater.pass_count());
+    let mut params = ParamSlab::new(ctx);
+    let start = Instant::now();
+    let mut rec = Recorder::new(ctx, &mut params, Some(&mut timer));
+    updater.reset();
+    let built = updater.record(&mut rec, &geometry, &scene.triangles, &mut tree);
+    rec.submit();
+    let cpu_time = built?;
+    let mut stages = timer.read(ctx)?;
+    stages.extend(cpu_time);
     Ok(LoadedScene {
         scene,
-        gpu_scene,
-        timing,
+        geometry,
+        tree,
+        timing: BuildTiming::from_stages(stages, start.elapsed().as_secs_f64() * 1e3),
         animated,
     })
 }

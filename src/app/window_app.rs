@@ -217,7 +217,6 @@ impl Running {
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("viewer frame"),
         });
-        self.viewer.record_tonemap(&self.ctx, &mut encoder);
         self.display.prepare(&self.ctx, self.viewer.image());
         let callback_buffers =
             self.egui_renderer

@@ -1,14 +1,15 @@
 //! The builders a user can choose by name, and one entry point that builds a scene's tree with any
-//! of them into GPU buffers ready to trace, with timings.
+//! of them (through `TreeUpdater`, the one dispatch point over builders) into GPU buffers ready to
+//! trace, with timings.
 
 use std::time::Instant;
 
-use super::lbvh::LbvhBuilder;
-use super::treelet::{TrbvhBuilder, TreeletSettings};
+use super::treelet::TreeletSettings;
+use super::update::{TreeUpdater, UpdateMode};
 use super::{build_sbvh, build_sweep_sah, Bvh, SahParams};
-use crate::gpu::{GpuContext, StageTime, Timing, Warmup};
+use crate::device::{Geometry, Tree};
+use crate::gpu::{GpuContext, GpuTimer, ParamSlab, Recorder, StageTime, Timing, Warmup};
 use crate::scene::Scene;
-use crate::trace::GpuScene;
 use crate::{Error, Result};
 
 /// A BVH construction method, selectable by name on the command line.
@@ -130,34 +131,49 @@ impl Builder {
             })
     }
 
-    /// Builds `scene`'s tree and returns the scene on the GPU ready to trace. GPU builders run the
-    /// untimed warm-up builds of `timing` (pipeline compilation, GPU clocks) and then
-    /// `timing.repeats` timed builds, reporting the one with the median time.
+    /// Uploads `scene` and builds its tree, ready to trace. GPU builders run the untimed warm-up
+    /// builds of `timing` (pipeline compilation, GPU clocks) and then `timing.repeats` timed
+    /// builds, each submitted and waited for, reporting the one with the median time. CPU
+    /// builders are timed once.
     pub fn build(
         self,
         ctx: &GpuContext,
         scene: &Scene,
         params: &SahParams,
         timing: &Timing,
-    ) -> Result<(GpuScene, BuildReport)> {
+    ) -> Result<(Geometry, Tree, BuildReport)> {
+        let geometry = Geometry::upload(ctx, scene)?;
         match self {
-            Builder::Sweep => cpu_build(ctx, scene, "cpu sweep", || {
+            Builder::Sweep => cpu_build(ctx, geometry, "cpu sweep", || {
                 build_sweep_sah(&scene.triangles, params)
             }),
-            Builder::Sbvh => cpu_build(ctx, scene, "cpu sbvh", || {
+            Builder::Sbvh => cpu_build(ctx, geometry, "cpu sbvh", || {
                 build_sbvh(&scene.triangles, params)
             }),
             Builder::Lbvh | Builder::Trbvh(_) | Builder::TrbvhSplit(_) => {
-                let mut gpu_scene = GpuScene::upload_geometry(ctx, scene)?;
-                let mut builder = GpuBuilder::new(ctx, self, params)?;
-                let warmup = timing.warm_up(|| builder.build(ctx, &mut gpu_scene).map(drop))?;
-                let mut reports = Vec::new();
-                for _ in 0..timing.repeats.max(1) {
-                    let start = Instant::now();
-                    let stages = builder.build(ctx, &mut gpu_scene)?;
+                let mut tree = Tree::empty(ctx)?;
+                let mut updater = TreeUpdater::new(ctx, UpdateMode::Rebuild(self), params)?;
+                let passes = updater.pass_count();
+                let mut slab = ParamSlab::new(ctx);
+                let mut build_once = |timer: Option<&mut GpuTimer>| -> Result<()> {
+                    let mut rec = Recorder::new(ctx, &mut slab, timer);
+                    let result = updater.record(&mut rec, &geometry, &scene.triangles, &mut tree);
+                    rec.submit();
+                    result.map(drop)
+                };
+                let warmup = timing.warm_up(|| {
+                    build_once(None)?;
                     ctx.device
                         .poll(wgpu::PollType::wait_indefinitely())
-                        .map_err(|e| Error::Gpu(format!("device poll failed: {e}")))?;
+                        .map_err(|e| Error::Gpu(format!("device poll failed: {e}")))
+                        .map(drop)
+                })?;
+                let mut reports = Vec::new();
+                for _ in 0..timing.repeats.max(1) {
+                    let mut timer = GpuTimer::new(ctx, passes);
+                    let start = Instant::now();
+                    build_once(Some(&mut timer))?;
+                    let stages = timer.read(ctx)?;
                     let wall_ms = start.elapsed().as_secs_f64() * 1e3;
                     let gpu_ms: Option<f64> = stages.iter().map(|s| s.ms).sum();
                     reports.push(BuildReport {
@@ -171,7 +187,8 @@ impl Builder {
                 reports.sort_by(|a, b| a.build_ms.total_cmp(&b.build_ms));
                 let median = reports.swap_remove(reports.len() / 2);
                 Ok((
-                    gpu_scene,
+                    geometry,
+                    tree,
                     BuildReport {
                         builds_ms,
                         warmup,
@@ -186,14 +203,14 @@ impl Builder {
 /// Runs a CPU builder once (timed, CPU time) and uploads its tree.
 fn cpu_build(
     ctx: &GpuContext,
-    scene: &Scene,
+    geometry: Geometry,
     label: &str,
     build: impl FnOnce() -> Bvh,
-) -> Result<(GpuScene, BuildReport)> {
+) -> Result<(Geometry, Tree, BuildReport)> {
     let start = Instant::now();
     let bvh = build();
     let build_ms = start.elapsed().as_secs_f64() * 1e3;
-    let gpu_scene = GpuScene::upload(ctx, scene, &bvh)?;
+    let tree = Tree::upload(ctx, &bvh)?;
     let report = BuildReport {
         build_ms,
         wall_ms: build_ms,
@@ -204,42 +221,5 @@ fn cpu_build(
         builds_ms: vec![build_ms],
         warmup: Warmup::default(),
     };
-    Ok((gpu_scene, report))
-}
-
-/// A GPU builder ready to rebuild a scene's tree every frame.
-pub enum GpuBuilder {
-    Lbvh(Box<LbvhBuilder>),
-    Trbvh(Box<TrbvhBuilder>),
-}
-
-impl GpuBuilder {
-    /// Pipelines for `builder`, which must be a GPU builder.
-    pub fn new(ctx: &GpuContext, builder: Builder, params: &SahParams) -> Result<Self> {
-        match builder {
-            Builder::Lbvh => Ok(Self::Lbvh(Box::new(LbvhBuilder::new(ctx)))),
-            Builder::Trbvh(settings) | Builder::TrbvhSplit(settings) => Ok(Self::Trbvh(Box::new(
-                TrbvhBuilder::new(ctx, settings, *params)?,
-            ))),
-            Builder::Sweep | Builder::Sbvh => Err(Error::InvalidArgument(format!(
-                "{} is a CPU reference builder, not a GPU builder",
-                builder.name()
-            ))),
-        }
-    }
-
-    /// SAH parameters for the next builds (the treelet builder's cost model and max leaf size).
-    pub fn set_sah_params(&mut self, params: SahParams) {
-        if let Self::Trbvh(b) = self {
-            b.sah = params;
-        }
-    }
-
-    /// Rebuilds the scene's tree in place; returns the per-stage GPU times.
-    pub fn build(&mut self, ctx: &GpuContext, scene: &mut GpuScene) -> Result<Vec<StageTime>> {
-        match self {
-            Self::Lbvh(b) => b.build(ctx, scene),
-            Self::Trbvh(b) => b.build(ctx, scene),
-        }
-    }
+    Ok((geometry, tree, report))
 }

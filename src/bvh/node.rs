@@ -13,7 +13,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
 /// Set in `right_or_count` of leaf nodes.
-pub const LEAF_FLAG: u32 = 0x8000_0000;
+pub use crate::gpu::constants::LEAF_FLAG;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]

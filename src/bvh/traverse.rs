@@ -6,11 +6,8 @@ use glam::Vec3;
 
 use super::Bvh;
 use crate::geometry::{Hit, Ray, RayTriangleTest};
+use crate::gpu::constants::BOX_EXIT_SLACK;
 use crate::scene::Triangle;
-
-/// Widening of a box's exit distance (see `BOX_EXIT_SLACK` in bvh_traverse.wgsl): rounding never
-/// culls a box that the ray touches.
-pub const BOX_EXIT_SLACK: f32 = 1.000_001_9;
 
 /// The ray as the box test needs it (see `BoxRay` in bvh_traverse.wgsl).
 struct BoxRay {

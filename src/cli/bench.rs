@@ -105,8 +105,8 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
         repeats: args.repeats,
     };
     for &builder in &builders {
-        let (gpu_scene, report) = builder.build(gpu, &scene, &params, &timing)?;
-        let bvh = gpu_scene.download_bvh(gpu)?;
+        let (geometry, tree, report) = builder.build(gpu, &scene, &params, &timing)?;
+        let bvh = tree.download(gpu)?;
         let validation = if builder.duplicates_references() {
             validate_with_references(&bvh, &scene.triangles)
         } else {
@@ -126,8 +126,15 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
         }
         let mut tracer = PathTracer::new(gpu, args.trace.render_settings())?;
         let trace = |tracer: &mut PathTracer| {
-            tracer.reset(gpu);
-            tracer.trace(gpu, &gpu_scene, &scene.camera, scene.sky, args.trace.spp)
+            tracer.reset();
+            tracer.trace(
+                gpu,
+                &geometry,
+                &tree,
+                &scene.camera,
+                scene.sky,
+                args.trace.spp,
+            )
         };
         let trace_warmup = timing.warm_up(|| trace(&mut tracer).map(drop))?;
         let mut traces = Vec::new();

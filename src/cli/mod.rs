@@ -217,8 +217,8 @@ fn parse_builder(name: &str) -> std::result::Result<Builder, String> {
 }
 
 /// A builder name, or `refit` / `refit-trbvh` (animated scenes).
-fn parse_update_mode(name: &str) -> std::result::Result<treelet::anim::UpdateMode, String> {
-    treelet::anim::UpdateMode::parse(name).map_err(|e| e.to_string())
+fn parse_update_mode(name: &str) -> std::result::Result<treelet::bvh::UpdateMode, String> {
+    treelet::bvh::UpdateMode::parse(name).map_err(|e| e.to_string())
 }
 
 pub fn run(cli: Cli) -> Result<()> {

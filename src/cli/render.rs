@@ -4,8 +4,8 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use treelet::anim::{load_still, UpdateMode};
-use treelet::bvh::Builder;
+use treelet::anim::load_still;
+use treelet::bvh::{Builder, UpdateMode};
 use treelet::gpu::{GpuContext, Timing};
 use treelet::trace::{save_png, PathTracer};
 use treelet::{Error, Result};
@@ -58,15 +58,22 @@ pub fn run(gpu: &GpuContext, args: &RenderArgs) -> Result<()> {
             "render takes one --treelet-size and one --rounds value".into(),
         ));
     };
-    let (gpu_scene, report) = builder.build(gpu, &scene, &params, &Timing::quick(1))?;
+    let (geometry, tree, report) = builder.build(gpu, &scene, &params, &Timing::quick(1))?;
     log::info!(
         "{} build: {:.2} ms, {} nodes",
         builder.label(),
         report.build_ms,
-        gpu_scene.node_count
+        tree.counts(gpu)?.0
     );
     let mut tracer = PathTracer::new(gpu, args.trace.render_settings())?;
-    let stats = tracer.trace(gpu, &gpu_scene, &scene.camera, scene.sky, args.trace.spp)?;
+    let stats = tracer.trace(
+        gpu,
+        &geometry,
+        &tree,
+        &scene.camera,
+        scene.sky,
+        args.trace.spp,
+    )?;
     let image = tracer.read_image(gpu)?;
     save_png(&image, &out)?;
     let mrays = stats

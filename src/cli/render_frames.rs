@@ -5,7 +5,9 @@
 //! `--spp` samples from the animation's camera → `<dir>/frame_0000.png`, …. CPU reference builders
 //! (`sweep`, `sbvh`) rebuild every frame from the CPU-evaluated triangles instead.
 //!
-//! The tree of every frame is read back for its SAH cost (not part of any timing). `--json`
+//! Each frame is one recording and one submission (animate → build → trace → tonemap), as in the
+//! viewer; then its image is read back for the PNG and its tree for its SAH cost (not part of any
+//! timing). `--json`
 //! prints one JSON object per frame on stdout; a progress bar runs on stderr (when it is a
 //! terminal).
 
@@ -15,10 +17,11 @@ use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
-use treelet::anim::{load_animation, TreeUpdater, UpdateMode};
-use treelet::bvh::{sah_cost, Builder};
-use treelet::gpu::{aggregate_stages, GpuContext, StageTime, Timing};
-use treelet::trace::{save_png, GpuScene, PathTracer};
+use treelet::anim::load_animation;
+use treelet::bvh::{sah_cost, Builder, TreeUpdater, UpdateMode};
+use treelet::device::{Geometry, Tree};
+use treelet::gpu::{aggregate_stages, GpuContext, GpuTimer, ParamSlab, Recorder, StageTime};
+use treelet::trace::{save_png, PathTracer};
 use treelet::{Error, Result};
 
 use super::render::RenderArgs;
@@ -85,58 +88,70 @@ pub fn run(gpu: &GpuContext, args: &RenderArgs, frames: u32) -> Result<()> {
         animation.stage().describe(),
         mode.label()
     );
-    let mut gpu_scene = GpuScene::upload_geometry(gpu, &first)?;
-    let mut updater = if mode.is_gpu() {
-        Some(TreeUpdater::new(gpu, mode, &params)?)
-    } else {
-        None
-    };
+    let geometry = Geometry::upload(gpu, &first)?;
+    let mut tree = Tree::empty(gpu)?;
+    let mut updater = TreeUpdater::new(gpu, mode, &params)?;
     let mut tracer = PathTracer::new(gpu, args.trace.render_settings())?;
+    let mut slab = ParamSlab::new(gpu);
     let bar = ProgressBar::new(u64::from(frames));
     if let Ok(style) = ProgressStyle::with_template("{bar:30} {pos}/{len} frames {msg}") {
         bar.set_style(style);
     }
     for frame in 0..frames {
         let t = range.frame_time(frame);
-        let (animate_ms, build_ms, stages) = match updater.as_mut() {
-            Some(updater) => {
-                let animate = animation.animate(gpu, t, &mut gpu_scene)?;
-                let start = Instant::now();
-                let stages = updater.update(gpu, &mut gpu_scene)?;
-                let build_ms = gpu_build_ms(&stages, elapsed_ms(start));
-                (animate.ms, build_ms, stages)
-            }
-            None => {
-                let start = Instant::now();
-                let scene = animation.scene_at(t);
-                let animate_ms = elapsed_ms(start);
-                let (built, report) =
-                    mode.builder()
-                        .build(gpu, &scene, &params, &Timing::quick(1))?;
-                gpu_scene = built;
-                (Some(animate_ms), report.build_ms, report.stages)
-            }
+        // The frame in one recording and one submission: animate → build → trace → tonemap.
+        let start = Instant::now();
+        let mut timer = GpuTimer::new(gpu, updater.pass_count() + 3);
+        let mut rec = Recorder::new(gpu, &mut slab, Some(&mut timer));
+        let animate_cpu = animation.animate(&mut rec, t, &geometry)?;
+        // CPU reference builders build from the frame's triangles on the CPU.
+        let triangles = if mode.is_gpu() {
+            Vec::new()
+        } else {
+            animation.scene_at(t).triangles
         };
-        let sah = sah_cost(&gpu_scene.download_bvh(gpu)?, &params);
-        tracer.reset(gpu);
-        let stats = tracer.trace(
-            gpu,
-            &gpu_scene,
+        let build_cpu = updater.record(&mut rec, &geometry, &triangles, &mut tree)?;
+        tracer.reset();
+        let recorded = tracer.record(
+            &mut rec,
+            &geometry,
+            &tree,
             &animation.camera(t),
             animation.sky(),
             args.trace.spp,
         )?;
-        save_frame(&tracer, gpu, &out_dir.join(format!("frame_{frame:04}.png")))?;
+        tracer.record_tonemap(&mut rec);
+        rec.submit();
+        let stages = timer.read(gpu)?;
+        let wall_ms = elapsed_ms(start);
+        let stage = |name: &str| stages.iter().find(|s| s.label == name).and_then(|s| s.ms);
+        let animate_ms = animate_cpu.and_then(|s| s.ms).or_else(|| stage("animate"));
+        let mut build_stages: Vec<StageTime> = stages
+            .iter()
+            .filter(|s| !matches!(s.label.as_str(), "animate" | "trace" | "tonemap"))
+            .cloned()
+            .collect();
+        build_stages.extend(build_cpu);
+        let build_ms = gpu_build_ms(&build_stages, wall_ms);
+        let stats = tracer.read_stats(gpu, recorded, stage("trace"), wall_ms)?;
+        // Outside the frame's timings: the tree for its SAH cost and the image.
+        let bvh = tree.download(gpu)?;
+        let sah = sah_cost(&bvh, &params);
+        save_frame(
+            &mut tracer,
+            gpu,
+            &out_dir.join(format!("frame_{frame:04}.png")),
+        )?;
         let record = FrameRecord {
             scene: animation.name().to_owned(),
             builder: mode.name().to_owned(),
             frame,
             t,
-            triangles: gpu_scene.triangle_count,
-            nodes: gpu_scene.node_count,
+            triangles: geometry.triangle_count,
+            nodes: bvh.nodes.len() as u32,
             animate_ms,
             build_ms,
-            stages_ms: aggregate_stages(stages)
+            stages_ms: aggregate_stages(build_stages)
                 .into_iter()
                 .map(|s| (s.label, s.ms))
                 .collect(),
@@ -170,6 +185,6 @@ pub fn run(gpu: &GpuContext, args: &RenderArgs, frames: u32) -> Result<()> {
     Ok(())
 }
 
-fn save_frame(tracer: &PathTracer, gpu: &GpuContext, path: &Path) -> Result<()> {
+fn save_frame(tracer: &mut PathTracer, gpu: &GpuContext, path: &Path) -> Result<()> {
     save_png(&tracer.read_image(gpu)?, path)
 }

@@ -4,8 +4,9 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use treelet::anim::{UpdateMode, DEFAULT_ANIMATION};
+use treelet::anim::DEFAULT_ANIMATION;
 use treelet::app::ViewerOptions;
+use treelet::bvh::UpdateMode;
 use treelet::gpu::GpuOptions;
 use treelet::Result;
 

@@ -83,3 +83,32 @@ impl Aabb {
         }
     }
 }
+
+/// A box as the GPU stages exchange it (32 bytes, like a `BvhNode`'s bounds; WGSL twin `Aabb` in
+/// `shaders/include/aabb.wgsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable, PartialEq)]
+pub struct GpuAabb {
+    pub min: [f32; 3],
+    pub _pad0: u32,
+    pub max: [f32; 3],
+    pub _pad1: u32,
+}
+const _: () = assert!(std::mem::size_of::<GpuAabb>() == 32);
+
+impl From<Aabb> for GpuAabb {
+    fn from(b: Aabb) -> Self {
+        Self {
+            min: b.min.to_array(),
+            _pad0: 0,
+            max: b.max.to_array(),
+            _pad1: 0,
+        }
+    }
+}
+
+impl From<GpuAabb> for Aabb {
+    fn from(b: GpuAabb) -> Self {
+        Aabb::new(b.min.into(), b.max.into())
+    }
+}

@@ -4,6 +4,6 @@ mod aabb;
 mod ray;
 mod ray_triangle;
 
-pub use aabb::Aabb;
+pub use aabb::{Aabb, GpuAabb};
 pub use ray::{Hit, Ray};
 pub use ray_triangle::{intersect_triangle, RayTriangleTest};

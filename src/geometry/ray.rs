@@ -27,7 +27,7 @@ pub struct Hit {
 const _: () = assert!(std::mem::size_of::<Hit>() == 16);
 
 impl Hit {
-    pub const MISS: u32 = u32::MAX;
+    pub const MISS: u32 = crate::gpu::constants::MISS;
 
     pub fn miss() -> Self {
         Self {

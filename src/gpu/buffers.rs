@@ -58,19 +58,6 @@ fn check_binding_size(ctx: &GpuContext, label: &str, size: u64) -> Result<()> {
     Ok(())
 }
 
-/// Workgroup grid for `items` invocations of `workgroup_size` each: 1D up to the per-dimension
-/// limit, then 2D. Kernels compute their linear index as `gid.x + gid.y * num_workgroups.x * size`.
-pub fn dispatch_grid(ctx: &GpuContext, items: u32, workgroup_size: u32) -> (u32, u32) {
-    let groups = items.div_ceil(workgroup_size).max(1);
-    let max = ctx.device.limits().max_compute_workgroups_per_dimension;
-    if groups <= max {
-        (groups, 1)
-    } else {
-        let y = groups.div_ceil(max);
-        (groups.div_ceil(y), y)
-    }
-}
-
 /// Copies `buffer` (its first `count` elements) back to the CPU; blocks until done.
 pub fn read_buffer<T: Pod>(
     ctx: &GpuContext,

@@ -4,6 +4,9 @@
 use std::collections::HashMap;
 use std::sync::Mutex;
 
+use wgpu::util::DeviceExt;
+
+use super::kernel::{compile, CompiledKernel, KernelInfo};
 use crate::{Error, Result};
 
 /// How to choose the adapter.
@@ -22,8 +25,11 @@ pub struct GpuContext {
     pub info: wgpu::AdapterInfo,
     /// Timestamp queries are available (otherwise timings read "n/a").
     pub timestamps: bool,
-    /// Compute pipelines by (kernel, entry point), compiled once per device.
-    pub(crate) pipelines: Mutex<HashMap<(String, String), wgpu::ComputePipeline>>,
+    /// Kernels by (file, entry point), compiled once per device.
+    kernels: Mutex<HashMap<(&'static str, &'static str), CompiledKernel>>,
+    /// The `count_limit` of kernels whose item count is known when recording (`ItemCount`):
+    /// one u32, u32::MAX.
+    pub(crate) no_count_limit: wgpu::Buffer,
 }
 
 /// Preference order of adapter types: discrete GPUs first, software rasterizers last.
@@ -75,14 +81,20 @@ impl GpuContext {
             info.driver,
             info.driver_info
         );
+        let no_count_limit = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("no count limit"),
+            contents: bytemuck::bytes_of(&u32::MAX),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
         Ok(Self {
+            no_count_limit,
             instance,
             adapter,
             device,
             queue,
             timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY),
             info,
-            pipelines: Mutex::default(),
+            kernels: Mutex::default(),
         })
     }
 
@@ -136,6 +148,15 @@ impl GpuContext {
             "{} ({:?}, {} {})",
             self.info.name, self.info.backend, self.info.driver, self.info.driver_info
         )
+    }
+
+    /// The pipeline and bind group layout of a kernel, compiled on first use.
+    pub(crate) fn compiled_kernel(&self, info: &'static KernelInfo) -> CompiledKernel {
+        let mut kernels = self.kernels.lock().unwrap_or_else(|e| e.into_inner());
+        kernels
+            .entry((info.name, info.entry))
+            .or_insert_with(|| compile(self, info))
+            .clone()
     }
 
     /// Largest storage buffer binding this device accepts, in bytes.

@@ -1,17 +1,31 @@
-//! GPU plumbing: device and adapter selection (`context`), storage buffers and read-back
-//! (`buffers`), WGSL sources with includes and pipeline creation (`shaders`), timestamp-query
-//! timing (`timer`), and warm-up plans and min/median/max of repeated timings (`spread`).
+//! GPU plumbing: device and adapter selection (`context`), storage buffers and blocking read-back
+//! (`buffers`), reads that do not wait (`readback`), WGSL sources with includes (`shaders`) and
+//! the numbers they share with Rust (`constants`), kernel declarations and dispatch (`kernel`),
+//! recordings of GPU work executed later (`recorder`) with their kernel parameters
+//! (`param_slab`), item counts known when recording or computed on the GPU (`item_count`),
+//! timestamp-query timing (`timer`), and warm-up plans and min/median/max of repeated timings
+//! (`spread`).
 
 mod buffers;
+pub mod constants;
 mod context;
+mod item_count;
+mod kernel;
+mod param_slab;
+mod readback;
+mod recorder;
 mod shaders;
 mod spread;
 mod timer;
 
-pub use buffers::{
-    bind_entry, dispatch_grid, read_buffer, storage_buffer, storage_buffer_zeroed, uniform_buffer,
-};
+pub use buffers::{bind_entry, read_buffer, storage_buffer, storage_buffer_zeroed, uniform_buffer};
 pub use context::{GpuContext, GpuOptions};
-pub use shaders::{compute_pipeline, shader_source, KERNELS};
+pub use item_count::ItemCount;
+pub(crate) use kernel::kernel;
+pub use kernel::{Grid, Items, Kernel, KernelDecl, KernelInfo, Slot};
+pub use param_slab::ParamSlab;
+pub use readback::Readback;
+pub use recorder::{Pass, Recorder};
+pub use shaders::shader_source;
 pub use spread::{Spread, Timing, Warmup};
 pub use timer::{aggregate_stages, GpuTimer, StageTime};

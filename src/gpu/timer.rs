@@ -78,29 +78,48 @@ impl GpuTimer {
         }
     }
 
-    /// Reads the stage times after the submission completed, and clears the timer for reuse.
-    pub fn read(&mut self, ctx: &GpuContext) -> Result<Vec<StageTime>> {
-        let labels = std::mem::take(&mut self.labels);
-        let Some((_, buffer)) = &self.queries else {
-            return Ok(labels
-                .into_iter()
-                .map(|label| StageTime { label, ms: None })
-                .collect());
-        };
-        let ticks: Vec<u64> = read_buffer(ctx, buffer, labels.len() * 2)?;
+    /// The buffer of the resolved timestamps (two u64 ticks per pass, after `resolve`), for a
+    /// read that does not wait; None without timestamp support.
+    pub fn resolved_buffer(&self) -> Option<&wgpu::Buffer> {
+        self.queries.as_ref().map(|(_, buffer)| buffer)
+    }
+
+    /// The labels of the passes recorded so far, in order; clears the timer for reuse.
+    pub fn take_labels(&mut self) -> Vec<String> {
+        std::mem::take(&mut self.labels)
+    }
+
+    /// The stage times of passes `labels` from their resolved `ticks` (None-valued without
+    /// timestamps: pass an empty `ticks`).
+    pub fn stage_times(ctx: &GpuContext, labels: Vec<String>, ticks: &[u64]) -> Vec<StageTime> {
         let period_ns = f64::from(ctx.queue.get_timestamp_period());
-        if period_ns <= 0.0 {
-            return Err(Error::Gpu("device reports a zero timestamp period".into()));
-        }
-        Ok(labels
+        labels
             .into_iter()
             .enumerate()
             .map(|(i, label)| {
-                let (start, end) = (ticks[2 * i], ticks[2 * i + 1]);
-                let ms = (end >= start).then(|| (end - start) as f64 * period_ns * 1e-6);
+                let ms = match ticks.get(2 * i..2 * i + 2) {
+                    Some(&[start, end]) if end >= start && period_ns > 0.0 => {
+                        Some((end - start) as f64 * period_ns * 1e-6)
+                    }
+                    _ => None,
+                };
                 StageTime { label, ms }
             })
-            .collect())
+            .collect()
+    }
+
+    /// Reads the stage times after the submission completed (blocks), and clears the timer for
+    /// reuse.
+    pub fn read(&mut self, ctx: &GpuContext) -> Result<Vec<StageTime>> {
+        let labels = self.take_labels();
+        let ticks: Vec<u64> = match &self.queries {
+            Some((_, buffer)) => read_buffer(ctx, buffer, labels.len() * 2)?,
+            None => Vec::new(),
+        };
+        if self.queries.is_some() && ctx.queue.get_timestamp_period() <= 0.0 {
+            return Err(Error::Gpu("device reports a zero timestamp period".into()));
+        }
+        Ok(Self::stage_times(ctx, labels, &ticks))
     }
 }
 
@@ -115,4 +134,35 @@ pub fn aggregate_stages(stages: Vec<StageTime>) -> Vec<StageTime> {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{aggregate_stages, StageTime};
+
+    fn stage(label: &str, ms: Option<f64>) -> StageTime {
+        StageTime {
+            label: label.into(),
+            ms,
+        }
+    }
+
+    #[test]
+    fn stages_with_one_label_add_up_in_first_seen_order() {
+        let stages = vec![
+            stage("bounds", Some(1.0)),
+            stage("sort", Some(2.0)),
+            stage("refit", None),
+            stage("sort", Some(3.0)),
+            stage("refit", Some(1.0)),
+        ];
+        assert_eq!(
+            aggregate_stages(stages),
+            vec![
+                stage("bounds", Some(1.0)),
+                stage("sort", Some(5.0)),
+                stage("refit", None)
+            ]
+        );
+    }
 }

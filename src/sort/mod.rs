@@ -3,8 +3,16 @@
 //! multi-level exclusive scan, stable scatter; Satish et al. 2009 / Merrill & Grimshaw 2010 without
 //! decoupled look-back), plus its CPU twin as the test oracle.
 
+mod counts_add;
+mod counts_scan;
+mod keys_histogram;
+mod keys_scatter;
 mod prefix_scan;
 mod radix_sort;
 
-pub use prefix_scan::{PrefixScan, ScanPlan, SCAN_BLOCK};
-pub use radix_sort::{sort_pairs, sort_pairs_cpu, RadixSort, RADIX_BITS, TILE_SIZE};
+pub use counts_add::COUNTS_ADD;
+pub use counts_scan::COUNTS_SCAN;
+pub use keys_histogram::KEYS_HISTOGRAM;
+pub use keys_scatter::KEYS_SCATTER;
+pub use prefix_scan::PrefixScan;
+pub use radix_sort::{sort_pairs_cpu, RadixSort, RADIX_BITS, SORT_TILE};

@@ -6,7 +6,7 @@
 //! operations, no atomics, 9 KiB of workgroup memory and 256 invocations per workgroup. Each of
 //! the ceil(key_bits / 4) passes records, in one compute pass for the whole sort:
 //!
-//! 1. `keys_histogram.wgsl`: per tile of [`TILE_SIZE`] keys, the 16 digit counts, stored
+//! 1. `keys_histogram.wgsl`: per tile of [`SORT_TILE`] keys, the 16 digit counts, stored
 //!    digit-major (`counts[digit * tiles + tile]`);
 //! 2. `counts_scan.wgsl` once per level (blocks of 1024, block totals to the next level) and
 //!    `counts_add.wgsl` once per level but the top (adds the scanned block totals back): an
@@ -21,6 +21,7 @@
 //! counters per invocation, so counting and ranking are a few vector instructions per pair with
 //! three barriers per tile, which more than pays for twice the passes.
 //!
+//! Kernels: `keys_histogram`, `counts_scan` / `counts_add` (via `PrefixScan`), `keys_scatter`.
 //! Passes ping-pong between the caller's buffers and internal scratch buffers, so that the result
 //! ends in the caller's buffers; with an odd number of passes the input is first copied to the
 //! scratch buffers (a buffer copy recorded before the compute pass), so the caller's buffers need
@@ -29,30 +30,28 @@
 //! The CPU twin [`sort_pairs_cpu`] is the same LSD radix sort on the CPU (the test oracle).
 
 use bytemuck::{Pod, Zeroable};
-use wgpu::util::DeviceExt;
 
-use super::prefix_scan::{bind_range, capped_grid, PrefixScan};
+use super::keys_histogram::KEYS_HISTOGRAM;
+use super::keys_scatter::KEYS_SCATTER;
+use super::prefix_scan::PrefixScan;
+pub use crate::gpu::constants::{RADIX_BITS, SORT_TILE};
 use crate::gpu::{
-    compute_pipeline, read_buffer, storage_buffer, storage_buffer_zeroed, GpuContext, GpuTimer,
+    read_buffer, storage_buffer, storage_buffer_zeroed, GpuContext, Grid, ItemCount, Kernel,
+    ParamSlab, Recorder,
 };
 use crate::{Error, Result};
 
-/// Bits per digit: one pass per 4 key bits.
-pub const RADIX_BITS: u32 = 4;
 const RADIX: u32 = 1 << RADIX_BITS;
-/// Pairs per workgroup (tile) of the histogram and scatter kernels (256 invocations × 32).
-pub const TILE_SIZE: u32 = 8192;
 
 /// Parameters of one sort pass (keys_histogram.wgsl, keys_scatter.wgsl).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
-struct SortParams {
+pub struct SortParams {
     n: u32,
     num_tiles: u32,
     shift: u32,
     bits: u32,
 }
-const _: () = assert!(std::mem::size_of::<SortParams>() == 16);
 
 /// Number of passes for `key_bits` sorted bits.
 fn pass_count(key_bits: u32) -> u32 {
@@ -77,29 +76,32 @@ impl Scratch {
             counts: storage_buffer_zeroed(
                 ctx,
                 "sort digit counts",
-                u64::from(capacity.div_ceil(TILE_SIZE) * RADIX) * 4,
+                u64::from(capacity.div_ceil(SORT_TILE) * RADIX) * 4,
             )?,
         })
     }
 }
 
-/// The GPU radix sort: pipelines created once per device, scratch buffers grown on demand.
+/// The GPU radix sort: kernels created once per device, scratch buffers grown on demand.
 pub struct RadixSort {
-    histogram: wgpu::ComputePipeline,
+    histogram: Kernel<SortParams>,
     scan: PrefixScan,
-    scatter: wgpu::ComputePipeline,
+    scatter: Kernel<SortParams>,
     scratch: Option<Scratch>,
     max_workgroups_per_dimension: u32,
+    /// Parameters of the sorts `sort_pairs` records and submits itself.
+    params: ParamSlab,
 }
 
 impl RadixSort {
     pub fn new(ctx: &GpuContext) -> Self {
         Self {
-            histogram: compute_pipeline(ctx, "keys_histogram.wgsl", "main"),
+            histogram: Kernel::new(ctx, &KEYS_HISTOGRAM),
             scan: PrefixScan::new(ctx),
-            scatter: compute_pipeline(ctx, "keys_scatter.wgsl", "main"),
+            scatter: Kernel::new(ctx, &KEYS_SCATTER),
             scratch: None,
             max_workgroups_per_dimension: u32::MAX,
+            params: ParamSlab::new(ctx),
         }
     }
 
@@ -111,41 +113,33 @@ impl RadixSort {
         self
     }
 
-    /// Workgroup grid for `groups` workgroups: 1D up to the per-dimension limit, then 2D.
-    fn grid(&self, ctx: &GpuContext, groups: u32) -> Result<(u32, u32)> {
-        capped_grid(
-            groups,
-            self.max_workgroups_per_dimension
-                .min(ctx.device.limits().max_compute_workgroups_per_dimension),
-        )
-    }
-
     /// Records the sort of the first `len` pairs of `keys` (`[u32; 2]` each, low word first) and
-    /// `values` (u32 each) by the low `key_bits` (1..=64) bits of the key, ascending and stable,
-    /// into `encoder`; nothing is submitted. The sorted pairs end in `keys` and `values`, which need
-    /// `STORAGE | COPY_SRC` usage. Internal scratch buffers grow to `len` on demand; several sorts
-    /// may be recorded into one encoder.
+    /// `values` (u32 each) by the low `key_bits` (1..=64) bits of the key, ascending and stable;
+    /// nothing is submitted. `len` may be a count computed on the GPU earlier in the recording:
+    /// the passes are sized for its capacity, and the pairs past the count are left as they are.
+    /// The sorted pairs end
+    /// in `keys` and `values`, which need `STORAGE | COPY_SRC` usage. Internal scratch buffers grow
+    /// to the capacity on demand; several sorts may be recorded into one recording.
     ///
-    /// Everything is one compute pass; with a timer it is the single timestamped pass "sort"
-    /// (one timer slot per call, also for `len` ≤ 1 where the pass is empty). The pass holds
-    /// ceil(key_bits / 4) × (1 + 2 × levels) dispatches, levels = scan levels of the len / 512
-    /// counts (1 up to 524,288 pairs, else 2 below 2^29 pairs).
-    #[allow(clippy::too_many_arguments)]
-    pub fn sort(
+    /// Everything is one compute pass, named "sort" (timestamped when the recording has a timer;
+    /// also for `len` ≤ 1, where the pass is empty). The pass holds ceil(key_bits / 4) ×
+    /// (1 + 2 × levels) dispatches, levels = scan levels of the len / 512 counts (1 up to 524,288
+    /// pairs, else 2 below 2^29 pairs).
+    pub fn record(
         &mut self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut Recorder<'_>,
         keys: &wgpu::Buffer,
         values: &wgpu::Buffer,
-        len: u32,
+        len: ItemCount<'_>,
         key_bits: u32,
-        timer: Option<&mut GpuTimer>,
     ) -> Result<()> {
         if !(1..=64).contains(&key_bits) {
             return Err(Error::InvalidArgument(format!(
                 "radix sort key_bits must be 1..=64, got {key_bits}"
             )));
         }
+        let limit = len.limit(rec.ctx);
+        let len = len.capacity();
         let (key_bytes, value_bytes) = (u64::from(len) * 8, u64::from(len) * 4);
         if keys.size() < key_bytes || values.size() < value_bytes {
             return Err(Error::InvalidArgument(format!(
@@ -156,93 +150,56 @@ impl RadixSort {
             )));
         }
         if len <= 1 {
-            let timestamp_writes = timer.and_then(|t| t.pass("sort"));
-            if timestamp_writes.is_some() {
-                encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("sort"),
-                    timestamp_writes,
-                });
-            }
+            rec.pass("sort");
             return Ok(());
         }
+        let ctx = rec.ctx;
         if self.scratch.as_ref().is_none_or(|s| s.capacity < len) {
             // Release the old buffers before allocating the new ones.
             self.scratch = None;
             self.scratch = Some(Scratch::new(ctx, len)?);
         }
         let scratch = self.scratch.as_ref().expect("scratch allocated above");
-
         let passes = pass_count(key_bits);
-        let num_tiles = len.div_ceil(TILE_SIZE);
-        let tile_grid = self.grid(ctx, num_tiles)?;
+        let num_tiles = len.div_ceil(SORT_TILE);
+        let max = self
+            .max_workgroups_per_dimension
+            .min(ctx.device.limits().max_compute_workgroups_per_dimension);
+        let tile_grid = Grid::items_capped(num_tiles, 1, max);
         let counts_len = num_tiles * RADIX;
-        let counts_bytes = u64::from(counts_len) * 4;
-        let scan_plan = self.scan.plan(ctx, &scratch.counts, counts_len)?;
+        self.scan.reserve(ctx, counts_len)?;
 
-        // One parameter slot per pass at uniform-offset alignment: every dispatch keeps its own
-        // parameters however many sorts are recorded before the submit.
-        let stride = u64::from(ctx.device.limits().min_uniform_buffer_offset_alignment).max(16);
-        let mut bytes = vec![0u8; passes as usize * stride as usize];
-        for pass in 0..passes {
-            let shift = pass * RADIX_BITS;
+        // Pass p reads `src` and writes `dst`; the last pass writes the caller's buffers.
+        let (mut src, mut dst) = ((keys, values), (&scratch.keys, &scratch.values));
+        if passes % 2 == 1 {
+            rec.encoder()
+                .copy_buffer_to_buffer(keys, 0, &scratch.keys, 0, key_bytes);
+            rec.encoder()
+                .copy_buffer_to_buffer(values, 0, &scratch.values, 0, value_bytes);
+            std::mem::swap(&mut src, &mut dst);
+        }
+        let mut pass = rec.pass("sort");
+        for p in 0..passes {
+            let shift = p * RADIX_BITS;
             let params = SortParams {
                 n: len,
                 num_tiles,
                 shift,
                 bits: RADIX_BITS.min(key_bits - shift),
             };
-            let at = pass as usize * stride as usize;
-            bytes[at..at + 16].copy_from_slice(bytemuck::bytes_of(&params));
-        }
-        let params = ctx
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("sort params"),
-                contents: &bytes,
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
-        let pass_params = |pass: u32| bind_range(0, &params, u64::from(pass) * stride, 16);
-
-        // Pass p reads `src` and writes `dst`; the last pass writes the caller's buffers.
-        let (mut src, mut dst) = ((keys, values), (&scratch.keys, &scratch.values));
-        if passes % 2 == 1 {
-            encoder.copy_buffer_to_buffer(keys, 0, &scratch.keys, 0, key_bytes);
-            encoder.copy_buffer_to_buffer(values, 0, &scratch.values, 0, value_bytes);
-            std::mem::swap(&mut src, &mut dst);
-        }
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("sort"),
-            timestamp_writes: timer.and_then(|t| t.pass("sort")),
-        });
-        for p in 0..passes {
-            let histogram = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("keys_histogram"),
-                layout: &self.histogram.get_bind_group_layout(0),
-                entries: &[
-                    pass_params(p),
-                    bind_range(1, src.0, 0, key_bytes),
-                    bind_range(2, &scratch.counts, 0, counts_bytes),
-                ],
-            });
-            let scatter = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("keys_scatter"),
-                layout: &self.scatter.get_bind_group_layout(0),
-                entries: &[
-                    pass_params(p),
-                    bind_range(1, src.0, 0, key_bytes),
-                    bind_range(2, src.1, 0, value_bytes),
-                    bind_range(3, &scratch.counts, 0, counts_bytes),
-                    bind_range(4, dst.0, 0, key_bytes),
-                    bind_range(5, dst.1, 0, value_bytes),
-                ],
-            });
-            pass.set_pipeline(&self.histogram);
-            pass.set_bind_group(0, &histogram, &[]);
-            pass.dispatch_workgroups(tile_grid.0, tile_grid.1, 1);
-            self.scan.record(&mut pass, &scan_plan);
-            pass.set_pipeline(&self.scatter);
-            pass.set_bind_group(0, &scatter, &[]);
-            pass.dispatch_workgroups(tile_grid.0, tile_grid.1, 1);
+            pass.dispatch(
+                &self.histogram,
+                tile_grid,
+                &params,
+                &[src.0, &scratch.counts, limit],
+            );
+            self.scan.record(&mut pass, &scratch.counts, counts_len)?;
+            pass.dispatch(
+                &self.scatter,
+                tile_grid,
+                &params,
+                &[src.0, src.1, &scratch.counts, dst.0, dst.1, limit],
+            );
             std::mem::swap(&mut src, &mut dst);
         }
         Ok(())
@@ -268,36 +225,26 @@ impl RadixSort {
             .map_err(|_| Error::InvalidArgument(format!("{} pairs to sort", keys.len())))?;
         let key_buffer = storage_buffer(ctx, "sort keys", keys)?;
         let value_buffer = storage_buffer(ctx, "sort values", values)?;
-        let mut encoder = ctx
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("sort pairs"),
-            });
-        self.sort(
-            ctx,
-            &mut encoder,
-            &key_buffer,
-            &value_buffer,
-            len,
-            key_bits,
-            None,
-        )?;
-        ctx.queue.submit([encoder.finish()]);
+        let mut params = std::mem::replace(&mut self.params, ParamSlab::new(ctx));
+        let result = {
+            let mut rec = Recorder::new(ctx, &mut params, None);
+            let result = self.record(
+                &mut rec,
+                &key_buffer,
+                &value_buffer,
+                ItemCount::Known(len),
+                key_bits,
+            );
+            rec.submit();
+            result
+        };
+        self.params = params;
+        result?;
         Ok((
             read_buffer(ctx, &key_buffer, keys.len())?,
             read_buffer(ctx, &value_buffer, values.len())?,
         ))
     }
-}
-
-/// One-shot [`RadixSort::sort_pairs`] (creates the pipelines; keep a [`RadixSort`] to sort often).
-pub fn sort_pairs(
-    ctx: &GpuContext,
-    keys: &[[u32; 2]],
-    values: &[u32],
-    key_bits: u32,
-) -> Result<(Vec<[u32; 2]>, Vec<u32>)> {
-    RadixSort::new(ctx).sort_pairs(ctx, keys, values, key_bits)
 }
 
 /// CPU twin of the GPU sort: an LSD radix sort with the same 4-bit digits (counting sort per

@@ -1,15 +1,18 @@
-//! Ray tracing on the GPU through a BVH: scene upload (`gpu_scene`), the diffuse path tracer with
-//! accumulation and tonemapping (`path_tracer`), PNG files (`png`), batched closest-hit and any-hit queries (`ray_query`), and the
-//! CPU brute-force oracle they are tested against (`brute_force`).
+//! Ray tracing on the GPU through a BVH: the diffuse path tracer with accumulation and
+//! tonemapping (`path_tracer`, kernels `paths_trace` and `image_tonemap`), batched closest-hit and
+//! any-hit queries (`rays_intersect`), PNG files (`png`), and the CPU brute-force oracle they are
+//! tested against (`brute_force`). Geometry and trees come from `device`.
 
 mod brute_force;
-mod gpu_scene;
+mod image_tonemap;
 mod path_tracer;
+mod paths_trace;
 mod png;
-mod ray_query;
+mod rays_intersect;
 
 pub use brute_force::brute_force_closest_hit;
-pub use gpu_scene::GpuScene;
-pub use path_tracer::{PathTracer, RenderSettings, TraceStats};
+pub use image_tonemap::IMAGE_TONEMAP;
+pub use path_tracer::{PathTracer, RecordedTrace, RenderSettings, TraceStats};
+pub use paths_trace::PATHS_TRACE;
 pub use png::save_png;
-pub use ray_query::{any_hits, closest_hits};
+pub use rays_intersect::{any_hits, closest_hits, RAYS_INTERSECT};

@@ -1,14 +1,14 @@
-//! The progressive diffuse path tracer (`shaders/paths_trace.wgsl`) and its tonemapping pass
-//! (`shaders/image_tonemap.wgsl`). Every traced ray is counted on the GPU; trace time comes from
-//! timestamp queries, so Mrays/s = rays / GPU trace time.
+//! The progressive diffuse path tracer (kernel `paths_trace`) and its tonemapping (kernel
+//! `image_tonemap`). Traces are recorded into the frame's recording; every traced ray is counted
+//! on the GPU, and trace time comes from timestamp queries, so Mrays/s = rays / GPU trace time.
 
-use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-use super::GpuScene;
+use super::image_tonemap::{TonemapParams, IMAGE_TONEMAP};
+use super::paths_trace::{TraceParams, PATHS_TRACE};
+use crate::device::{Geometry, Tree};
 use crate::gpu::{
-    bind_entry, compute_pipeline, read_buffer, storage_buffer_zeroed, uniform_buffer, GpuContext,
-    GpuTimer,
+    read_buffer, storage_buffer_zeroed, GpuContext, GpuTimer, Grid, Kernel, ParamSlab, Recorder,
 };
 use crate::scene::Camera;
 use crate::{Error, Result};
@@ -53,49 +53,41 @@ impl TraceStats {
     }
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct TraceParams {
-    eye: [f32; 3],
-    seed: u32,
-    right: [f32; 3],
-    width: u32,
-    up: [f32; 3],
-    height: u32,
-    forward: [f32; 3],
-    max_depth: u32,
-    sky: [f32; 3],
-    samples: u32,
-    light_count: u32,
-    /// Always 0: keeps the triangle test's products unfused (`opaque` in ray_triangle.wgsl).
-    opaque_zero: u32,
-    _pad: [u32; 2],
-}
-const _: () = assert!(std::mem::size_of::<TraceParams>() == 96);
-
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct TonemapParams {
-    width: u32,
-    height: u32,
-    exposure: f32,
-    _pad: u32,
-}
-const _: () = assert!(std::mem::size_of::<TonemapParams>() == 16);
-
 /// Rays counted by one dispatch must fit the kernel's u32 counter.
 const MAX_RAYS_PER_DISPATCH: u64 = 1 << 31;
+/// Dispatches one trace records at most (each counts its rays in its own pair of counters).
+const MAX_DISPATCHES: u32 = 64;
+
+/// The dispatches of one recorded trace: their count and the samples they add.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RecordedTrace {
+    pub dispatches: u32,
+    pub samples: u32,
+}
+
+impl RecordedTrace {
+    /// (rays, stack overflows) from the tracer's counters as read back after the submission.
+    pub fn totals(&self, counters: &[u32]) -> (u64, u64) {
+        counters
+            .chunks_exact(2)
+            .take(self.dispatches as usize)
+            .fold((0, 0), |(r, o), c| {
+                (r + u64::from(c[0]), o + u64::from(c[1]))
+            })
+    }
+}
 
 pub struct PathTracer {
     settings: RenderSettings,
-    trace_pipeline: wgpu::ComputePipeline,
-    tonemap_pipeline: wgpu::ComputePipeline,
-    trace_params: wgpu::Buffer,
-    tonemap_params: wgpu::Buffer,
+    trace: Kernel<TraceParams>,
+    tonemap: Kernel<TonemapParams>,
     accum: wgpu::Buffer,
     pixels: wgpu::Buffer,
+    /// Per dispatch of the last recorded trace: [rays, stack overflows].
     counters: wgpu::Buffer,
     samples_done: u32,
+    /// Parameters of what this tracer records and submits itself (`trace`, `read_image`).
+    params: ParamSlab,
 }
 
 impl PathTracer {
@@ -116,23 +108,13 @@ impl PathTracer {
         }
         Ok(Self {
             settings,
-            trace_pipeline: compute_pipeline(ctx, "paths_trace.wgsl", "main"),
-            tonemap_pipeline: compute_pipeline(ctx, "image_tonemap.wgsl", "main"),
-            trace_params: uniform_buffer(ctx, "trace params", &TraceParams::zeroed()),
-            tonemap_params: uniform_buffer(
-                ctx,
-                "tonemap params",
-                &TonemapParams {
-                    width: settings.width,
-                    height: settings.height,
-                    exposure: settings.exposure,
-                    _pad: 0,
-                },
-            ),
+            trace: Kernel::new(ctx, &PATHS_TRACE),
+            tonemap: Kernel::new(ctx, &IMAGE_TONEMAP),
             accum: storage_buffer_zeroed(ctx, "accumulation", pixel_count * 16)?,
             pixels: storage_buffer_zeroed(ctx, "pixels", pixel_count * 4)?,
-            counters: storage_buffer_zeroed(ctx, "trace counters", 8)?,
+            counters: storage_buffer_zeroed(ctx, "trace counters", u64::from(MAX_DISPATCHES) * 8)?,
             samples_done: 0,
+            params: ParamSlab::new(ctx),
         })
     }
 
@@ -145,91 +127,138 @@ impl PathTracer {
         self.samples_done
     }
 
-    /// Starts accumulation over (after a camera, scene or setting change).
-    pub fn reset(&mut self, ctx: &GpuContext) {
-        let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        encoder.clear_buffer(&self.accum, 0, None);
-        ctx.queue.submit([encoder.finish()]);
+    /// Starts accumulation over (after a camera, scene or setting change): the next recorded
+    /// trace clears the accumulation first.
+    pub fn reset(&mut self) {
         self.samples_done = 0;
     }
 
-    /// Traces `samples` more paths per pixel and accumulates them. Blocks until the GPU is done.
-    pub fn trace(
+    /// The counters of the last recorded trace (see `RecordedTrace::totals`).
+    pub fn counters(&self) -> &wgpu::Buffer {
+        &self.counters
+    }
+
+    /// Records `samples` more paths per pixel through `tree` (pass "trace"), accumulating.
+    pub fn record(
         &mut self,
-        ctx: &GpuContext,
-        scene: &GpuScene,
+        rec: &mut Recorder<'_>,
+        geometry: &Geometry,
+        tree: &Tree,
         camera: &Camera,
         sky: Vec3,
         samples: u32,
-    ) -> Result<TraceStats> {
+    ) -> Result<RecordedTrace> {
         let s = self.settings;
         // Each path vertex traces its bounce ray and one shadow ray per light.
         let rays_per_sample = u64::from(s.width)
             * u64::from(s.height)
             * u64::from(s.max_depth)
-            * (1 + u64::from(scene.light_count));
+            * (1 + u64::from(geometry.light_count));
         let per_dispatch =
             (MAX_RAYS_PER_DISPATCH / rays_per_sample).clamp(1, u64::from(samples.max(1))) as u32;
-        let layout = self.trace_pipeline.get_bind_group_layout(0);
-        let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("paths_trace"),
-            layout: &layout,
-            entries: &[
-                bind_entry(0, &self.trace_params),
-                bind_entry(1, &scene.triangles),
-                bind_entry(2, &scene.materials),
-                bind_entry(3, &scene.nodes),
-                bind_entry(4, &scene.prim_indices),
-                bind_entry(5, &self.accum),
-                bind_entry(6, &self.counters),
-                bind_entry(7, &scene.lights),
-            ],
-        });
-        let mut stats = TraceStats::default();
-        let mut timer = GpuTimer::new(ctx, 1);
-        let start = std::time::Instant::now();
+        let dispatches = samples.div_ceil(per_dispatch);
+        if dispatches > MAX_DISPATCHES {
+            return Err(Error::InvalidArgument(format!(
+                "{samples} samples of {}x{} pixels in one trace: at most {} per call",
+                s.width,
+                s.height,
+                per_dispatch * MAX_DISPATCHES
+            )));
+        }
+        if self.samples_done == 0 {
+            rec.encoder().clear_buffer(&self.accum, 0, None);
+        }
+        rec.encoder().clear_buffer(&self.counters, 0, None);
+        let grid = Grid::workgroups(s.width.div_ceil(8), s.height.div_ceil(8));
+        let mut pass = rec.pass("trace");
         let mut remaining = samples;
-        while remaining > 0 {
+        for slot in 0..dispatches {
             let batch = remaining.min(per_dispatch);
-            let params = self.params(camera, sky, scene.light_count, batch);
-            ctx.queue
-                .write_buffer(&self.trace_params, 0, bytemuck::bytes_of(&params));
-            let mut encoder = ctx.device.create_command_encoder(&Default::default());
-            encoder.clear_buffer(&self.counters, 0, None);
-            {
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("paths_trace"),
-                    timestamp_writes: timer.pass("trace"),
-                });
-                pass.set_pipeline(&self.trace_pipeline);
-                pass.set_bind_group(0, &bind_group, &[]);
-                pass.dispatch_workgroups(s.width.div_ceil(8), s.height.div_ceil(8), 1);
-            }
-            timer.resolve(&mut encoder);
-            ctx.queue.submit([encoder.finish()]);
-            let counters: Vec<u32> = read_buffer(ctx, &self.counters, 2)?;
-            if counters[1] > 0 {
-                return Err(Error::Gpu(format!(
-                    "{} paths overflowed the traversal stack (tree deeper than the kernel supports)",
-                    counters[1]
-                )));
-            }
-            stats.rays += u64::from(counters[0]);
-            let times = timer.read(ctx)?;
-            stats.trace_ms = match (stats.trace_ms, times[0].ms) {
-                (Some(total), Some(ms)) => Some(total + ms),
-                (None, Some(ms)) if stats.samples == 0 => Some(ms),
-                _ => None,
-            };
-            stats.samples += batch;
+            let params = self.params(camera, sky, geometry.light_count, batch, slot);
+            pass.dispatch(
+                &self.trace,
+                grid,
+                &params,
+                &[
+                    &geometry.triangles,
+                    &geometry.materials,
+                    &tree.nodes,
+                    &tree.prim_indices,
+                    &self.accum,
+                    &self.counters,
+                    &geometry.lights,
+                ],
+            );
             self.samples_done += batch;
             remaining -= batch;
         }
-        stats.wall_ms = start.elapsed().as_secs_f64() * 1e3;
-        Ok(stats)
+        Ok(RecordedTrace {
+            dispatches,
+            samples,
+        })
     }
 
-    fn params(&self, camera: &Camera, sky: Vec3, light_count: u32, samples: u32) -> TraceParams {
+    /// Traces `samples` more paths per pixel and accumulates them; blocks until the GPU is done
+    /// and reads the ray count and the GPU time back.
+    #[allow(clippy::too_many_arguments)]
+    pub fn trace(
+        &mut self,
+        ctx: &GpuContext,
+        geometry: &Geometry,
+        tree: &Tree,
+        camera: &Camera,
+        sky: Vec3,
+        samples: u32,
+    ) -> Result<TraceStats> {
+        let start = std::time::Instant::now();
+        let mut timer = GpuTimer::new(ctx, 1);
+        let mut params = std::mem::replace(&mut self.params, ParamSlab::new(ctx));
+        let recorded = {
+            let mut rec = Recorder::new(ctx, &mut params, Some(&mut timer));
+            let recorded = self.record(&mut rec, geometry, tree, camera, sky, samples);
+            rec.submit();
+            recorded
+        };
+        self.params = params;
+        let recorded = recorded?;
+        let times = timer.read(ctx)?;
+        let trace_ms = times.first().and_then(|t| t.ms);
+        self.read_stats(ctx, recorded, trace_ms, start.elapsed().as_secs_f64() * 1e3)
+    }
+
+    /// The statistics of a recorded trace after its submission (blocks to read the counters):
+    /// an error when paths overflowed the traversal stack.
+    pub fn read_stats(
+        &self,
+        ctx: &GpuContext,
+        recorded: RecordedTrace,
+        trace_ms: Option<f64>,
+        wall_ms: f64,
+    ) -> Result<TraceStats> {
+        let counters: Vec<u32> =
+            read_buffer(ctx, &self.counters, 2 * recorded.dispatches as usize)?;
+        let (rays, overflows) = recorded.totals(&counters);
+        if overflows > 0 {
+            return Err(Error::Gpu(format!(
+                "{overflows} paths overflowed the traversal stack (tree deeper than the kernel supports)"
+            )));
+        }
+        Ok(TraceStats {
+            rays,
+            trace_ms,
+            wall_ms,
+            samples: recorded.samples,
+        })
+    }
+
+    fn params(
+        &self,
+        camera: &Camera,
+        sky: Vec3,
+        light_count: u32,
+        samples: u32,
+        counter_slot: u32,
+    ) -> TraceParams {
         let s = self.settings;
         let forward = (camera.target - camera.eye).normalize();
         let right = forward.cross(camera.up).normalize();
@@ -249,44 +278,39 @@ impl PathTracer {
             samples,
             light_count,
             opaque_zero: 0,
-            _pad: [0; 2],
+            counter_slot,
+            _pad: 0,
         }
     }
-
     /// The tonemapped image: `width * height` packed RGBA8 pixels (r in the low byte), row 0 at
-    /// the top, written by `tonemap`.
+    /// the top, written by `record_tonemap`.
     pub fn pixels(&self) -> &wgpu::Buffer {
         &self.pixels
     }
 
-    /// Records the tonemap dispatch (accumulation -> `pixels`) into `encoder`, without reading
-    /// anything back: the viewer displays `pixels` straight from the GPU.
-    pub fn tonemap(&self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder) {
+    /// Records the tonemap (accumulation -> `pixels`, pass "tonemap"), without reading anything
+    /// back: the viewer displays `pixels` straight from the GPU.
+    pub fn record_tonemap(&self, rec: &mut Recorder<'_>) {
         let s = self.settings;
-        let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("image_tonemap"),
-            layout: &self.tonemap_pipeline.get_bind_group_layout(0),
-            entries: &[
-                bind_entry(0, &self.tonemap_params),
-                bind_entry(1, &self.accum),
-                bind_entry(2, &self.pixels),
-            ],
-        });
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("image_tonemap"),
-            timestamp_writes: None,
-        });
-        pass.set_pipeline(&self.tonemap_pipeline);
-        pass.set_bind_group(0, &bind_group, &[]);
-        pass.dispatch_workgroups(s.width.div_ceil(8), s.height.div_ceil(8), 1);
+        let params = TonemapParams {
+            width: s.width,
+            height: s.height,
+            exposure: s.exposure,
+            _pad: 0,
+        };
+        let grid = Grid::workgroups(s.width.div_ceil(8), s.height.div_ceil(8));
+        rec.pass("tonemap")
+            .dispatch(&self.tonemap, grid, &params, &[&self.accum, &self.pixels]);
     }
 
     /// Tonemaps the accumulated image and reads it back.
-    pub fn read_image(&self, ctx: &GpuContext) -> Result<image::RgbaImage> {
+    pub fn read_image(&mut self, ctx: &GpuContext) -> Result<image::RgbaImage> {
         let s = self.settings;
-        let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        self.tonemap(ctx, &mut encoder);
-        ctx.queue.submit([encoder.finish()]);
+        let mut params = std::mem::replace(&mut self.params, ParamSlab::new(ctx));
+        let mut rec = Recorder::new(ctx, &mut params, None);
+        self.record_tonemap(&mut rec);
+        rec.submit();
+        self.params = params;
         let pixels: Vec<u32> = read_buffer(ctx, &self.pixels, (s.width * s.height) as usize)?;
         image::RgbaImage::from_raw(s.width, s.height, bytemuck::cast_slice(&pixels).to_vec())
             .ok_or_else(|| Error::Gpu("pixel buffer has the wrong size".into()))

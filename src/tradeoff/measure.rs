@@ -38,9 +38,9 @@ pub fn measure(
             settings.spp, settings.repeats
         )));
     }
-    let (gpu_scene, report) =
+    let (geometry, tree, report) =
         builder.build(ctx, scene, &settings.sah, &Timing::quick(settings.repeats))?;
-    let bvh = gpu_scene.download_bvh(ctx)?;
+    let bvh = tree.download(ctx)?;
     let validation = if builder.duplicates_references() {
         validate_with_references(&bvh, &scene.triangles)
     } else {
@@ -54,13 +54,13 @@ pub fn measure(
         }
     };
     // Warm-up: the first dispatch on a new tree pays for caches and (once) pipeline compilation.
-    tracer.reset(ctx);
-    tracer.trace(ctx, &gpu_scene, camera, scene.sky, 1)?;
+    tracer.reset();
+    tracer.trace(ctx, &geometry, &tree, camera, scene.sky, 1)?;
     let mut throughputs = Vec::with_capacity(settings.repeats as usize);
     for _ in 0..settings.repeats {
         // From the same seeds every time: the same paths.
-        tracer.reset(ctx);
-        let stats = tracer.trace(ctx, &gpu_scene, camera, scene.sky, settings.spp)?;
+        tracer.reset();
+        let stats = tracer.trace(ctx, &geometry, &tree, camera, scene.sky, settings.spp)?;
         // Without timestamp queries, wall-clock time stands in for GPU time.
         throughputs.push(
             stats

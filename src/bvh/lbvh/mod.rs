@@ -1,36 +1,61 @@
 //! GPU LBVH construction (Karras 2012, "Maximizing Parallelism in the Construction of BVHs, Octrees,
 //! and k-d Trees"), every stage a WGSL kernel: centroid bounds → Morton keys → radix sort →
 //! hierarchy emission → bottom-up bounds. Each stage has a CPU twin; `build_lbvh_cpu` chains them
-//! into the reference tree that the GPU output must equal bit for bit.
+//! into the reference tree (tests compare each GPU stage with its twin fed the GPU's own input).
 //!
 //! Output layout (the project's `BvhNode` layout): internal nodes 0..n-2 (root 0), leaf j at node
 //! n-1+j holding `prim_indices[j]`, the primitives in Morton order.
 
-mod centroid_bounds;
-mod hierarchy;
-mod morton;
-mod prim_bounds;
-mod refit;
+mod bounds_refit;
+mod centroids_reduce;
+mod lbvh_hierarchy;
+mod morton_compute;
+mod triangles_bounds;
 
-pub use centroid_bounds::centroid_bounds_cpu;
-pub use hierarchy::{hierarchy_cpu, Hierarchy};
-pub use morton::{morton_key, morton_keys_cpu, MORTON_BITS};
-pub use prim_bounds::{prim_boxes_cpu, GpuAabb};
-pub use refit::assemble_lbvh_cpu;
+pub use bounds_refit::{assemble_lbvh_cpu, BOUNDS_REFIT};
+pub use centroids_reduce::{
+    centroid_bounds_cpu, CentroidsReduce, CENTROIDS_FROM_BOXES, CENTROIDS_FROM_PRIMS,
+};
+pub use lbvh_hierarchy::{hierarchy_cpu, Hierarchy, LBVH_HIERARCHY};
+pub use morton_compute::{morton_key, morton_keys_cpu, MORTON_BITS, MORTON_COMPUTE};
+pub use triangles_bounds::{prim_boxes_cpu, TrianglesBounds, TRIANGLES_BOUNDS};
 
-pub use centroid_bounds::CentroidBounds;
-use hierarchy::HierarchyEmission;
-use morton::MortonKeys;
-pub use prim_bounds::TriangleBounds;
-use refit::BoundsRefit;
+use bounds_refit::BoundsRefit;
+use lbvh_hierarchy::LbvhHierarchy;
+use morton_compute::MortonCompute;
 
 use super::{Bvh, BvhNode};
+use crate::device::{Geometry, Tree};
 use crate::geometry::Aabb;
-use crate::gpu::{read_buffer, storage_buffer_zeroed, GpuContext, GpuTimer, StageTime};
+use crate::gpu::{
+    read_buffer, storage_buffer_zeroed, GpuContext, GpuTimer, ItemCount, ParamSlab, Recorder,
+    StageTime,
+};
 use crate::scene::Triangle;
 use crate::sort::{sort_pairs_cpu, RadixSort};
-use crate::trace::GpuScene;
 use crate::{Error, Result};
+
+/// What an LBVH is built over.
+#[derive(Clone, Copy, Debug)]
+pub enum LbvhInput<'a> {
+    /// The first `count` triangles of a triangle buffer (`scene::Triangle` each).
+    Triangles {
+        buffer: &'a wgpu::Buffer,
+        count: u32,
+    },
+    /// The primitive boxes already written to `LbvhBuilder::prim_boxes` (by the pre-splitting
+    /// stage, which computes their count on the GPU).
+    PrimBoxes(ItemCount<'a>),
+}
+
+impl<'a> LbvhInput<'a> {
+    fn count(self) -> ItemCount<'a> {
+        match self {
+            LbvhInput::Triangles { count, .. } => ItemCount::Known(count),
+            LbvhInput::PrimBoxes(count) => count,
+        }
+    }
+}
 
 /// CPU twin of the whole GPU LBVH pipeline over triangles.
 pub fn build_lbvh_cpu(triangles: &[Triangle]) -> Bvh {
@@ -51,12 +76,6 @@ pub fn build_lbvh_from_boxes_cpu(prim_boxes: &[Aabb]) -> (Bvh, Vec<u32>) {
     (bvh, hierarchy.parents)
 }
 
-/// The primitives a build runs over: `count` boxes (`GpuAabb`) in `boxes`.
-pub(crate) struct Prims<'a> {
-    pub boxes: &'a wgpu::Buffer,
-    pub count: u32,
-}
-
 /// Intermediate results of one GPU build, read back for stage-by-stage comparison in tests.
 #[derive(Clone, Debug)]
 pub struct LbvhStages {
@@ -68,7 +87,7 @@ pub struct LbvhStages {
     pub bvh: Bvh,
 }
 
-/// Scratch buffers sized for up to `capacity` triangles.
+/// Scratch buffers sized for up to `capacity` primitives.
 struct Scratch {
     capacity: u32,
     prim_boxes: wgpu::Buffer,
@@ -78,74 +97,92 @@ struct Scratch {
     arrivals: wgpu::Buffer,
 }
 
-/// The GPU LBVH builder: pipelines and scratch space, reused across frames.
+/// The GPU LBVH builder: kernels and scratch space, reused across frames.
 pub struct LbvhBuilder {
-    triangle_bounds: TriangleBounds,
-    bounds: CentroidBounds,
-    morton: MortonKeys,
+    triangles_bounds: TrianglesBounds,
+    centroids: CentroidsReduce,
+    morton: MortonCompute,
     sort: RadixSort,
-    hierarchy: HierarchyEmission,
+    hierarchy: LbvhHierarchy,
     refit: BoundsRefit,
     scratch: Option<Scratch>,
+    /// Parameters of the builds this builder records and submits itself (`build`).
+    params: ParamSlab,
 }
 
 /// Timestamped passes one build records (bounds, morton, sort, hierarchy, refit).
-const TIMER_CAPACITY: u32 = 5;
+pub const LBVH_PASSES: u32 = 5;
 
 impl LbvhBuilder {
     pub fn new(ctx: &GpuContext) -> Self {
         Self {
-            triangle_bounds: TriangleBounds::new(ctx),
-            bounds: CentroidBounds::new(ctx),
-            morton: MortonKeys::new(ctx),
+            triangles_bounds: TrianglesBounds::new(ctx),
+            centroids: CentroidsReduce::new(ctx),
+            morton: MortonCompute::new(ctx),
             sort: RadixSort::new(ctx),
-            hierarchy: HierarchyEmission::new(ctx),
+            hierarchy: LbvhHierarchy::new(ctx),
             refit: BoundsRefit::new(ctx),
             scratch: None,
+            params: ParamSlab::new(ctx),
         }
     }
 
-    /// Builds the tree of `scene`'s triangles into `scene.nodes`/`scene.prim_indices` in one
-    /// submission; returns the per-stage GPU times.
-    pub fn build(&mut self, ctx: &GpuContext, scene: &mut GpuScene) -> Result<Vec<StageTime>> {
-        let mut timer = GpuTimer::new(ctx, TIMER_CAPACITY);
-        let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        self.record(ctx, &mut encoder, scene, &mut timer)?;
-        timer.resolve(&mut encoder);
-        ctx.queue.submit([encoder.finish()]);
+    /// Builds `geometry`'s tree into `tree` in one submission and waits; returns the per-stage
+    /// GPU times.
+    pub fn build(
+        &mut self,
+        ctx: &GpuContext,
+        geometry: &Geometry,
+        tree: &mut Tree,
+    ) -> Result<Vec<StageTime>> {
+        let mut timer = GpuTimer::new(ctx, LBVH_PASSES);
+        let mut params = std::mem::replace(&mut self.params, ParamSlab::new(ctx));
+        let result = {
+            let mut rec = Recorder::new(ctx, &mut params, Some(&mut timer));
+            let result = self.record(&mut rec, geometry, tree);
+            rec.submit();
+            result
+        };
+        self.params = params;
+        result?;
         timer.read(ctx)
     }
 
-    /// Records a whole build over the scene's triangles into `encoder` (5 timestamped passes);
-    /// returns the primitive count. Later stages (treelet optimization) append to the encoder.
+    /// Records a whole build over `geometry`'s triangles into `tree` (5 timestamped passes),
+    /// grown as needed: internal nodes 0..n-2, leaf j at node n-1+j.
     pub fn record(
         &mut self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        scene: &mut GpuScene,
-        timer: &mut GpuTimer,
-    ) -> Result<u32> {
-        let n = scene.triangle_count;
-        self.prepare(ctx, scene, n)?;
-        self.record_keys(ctx, encoder, scene, n, true, timer);
-        self.record_tree(ctx, encoder, scene, n, timer)?;
-        Ok(n)
+        rec: &mut Recorder<'_>,
+        geometry: &Geometry,
+        tree: &mut Tree,
+    ) -> Result<()> {
+        let n = geometry.triangle_count;
+        self.reserve(rec.ctx, n)?;
+        tree.reserve(rec.ctx, 2 * n - 1, n)?;
+        let input = LbvhInput::Triangles {
+            buffer: &geometry.triangles,
+            count: n,
+        };
+        self.record_into(rec, input, &tree.nodes, &tree.prim_indices)?;
+        rec.ctx
+            .queue
+            .write_buffer(&tree.counts, 0, bytemuck::cast_slice(&[2 * n - 1, n]));
+        Ok(())
     }
 
-    /// Records a build over `count` primitive boxes already written to `prim_boxes()` (by the
-    /// pre-splitting stage, after `reserve(count)`); returns `count`.
-    pub fn record_prims(
+    /// Records a build over `input`'s n primitives into `nodes` (2n − 1) and `order` (the
+    /// primitive of each leaf, n); with primitive boxes as the input, after
+    /// `reserve(count.capacity())`.
+    pub fn record_into(
         &mut self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        scene: &mut GpuScene,
-        count: u32,
-        timer: &mut GpuTimer,
-    ) -> Result<u32> {
-        self.prepare(ctx, scene, count)?;
-        self.record_keys(ctx, encoder, scene, count, false, timer);
-        self.record_tree(ctx, encoder, scene, count, timer)?;
-        Ok(count)
+        rec: &mut Recorder<'_>,
+        input: LbvhInput<'_>,
+        nodes: &wgpu::Buffer,
+        order: &wgpu::Buffer,
+    ) -> Result<()> {
+        self.reserve(rec.ctx, input.count().capacity())?;
+        self.record_keys(rec, input, order);
+        self.record_tree(rec, input.count(), nodes, order)
     }
 
     /// Grows the scratch space to hold `capacity` primitives.
@@ -161,7 +198,7 @@ impl LbvhBuilder {
             self.scratch = Some(Scratch {
                 capacity,
                 prim_boxes: storage_buffer_zeroed(ctx, "prim boxes", n * 32)?,
-                bounds_levels: CentroidBounds::level_buffers(ctx, capacity)?,
+                bounds_levels: CentroidsReduce::level_buffers(ctx, capacity)?,
                 keys: storage_buffer_zeroed(ctx, "morton keys", n * 8)?,
                 parents: storage_buffer_zeroed(ctx, "parents", (2 * n - 1) * 4)?,
                 arrivals: storage_buffer_zeroed(ctx, "arrival counters", n * 4)?,
@@ -180,145 +217,97 @@ impl LbvhBuilder {
         self.scratch.as_ref().map(|s| &s.parents)
     }
 
-    /// Like `build`, but in two submissions with every intermediate buffer read back.
-    pub fn build_stages(&mut self, ctx: &GpuContext, scene: &mut GpuScene) -> Result<LbvhStages> {
-        let n = scene.triangle_count;
-        self.prepare(ctx, scene, n)?;
-        let mut timer = GpuTimer::new(ctx, TIMER_CAPACITY);
-        let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        self.record_keys(ctx, &mut encoder, scene, n, true, &mut timer);
-        ctx.queue.submit([encoder.finish()]);
-        let scratch = self.scratch.as_ref().expect("prepared");
+    /// Like `build`, but in two submissions with every intermediate buffer read back (tests).
+    pub fn build_stages(&mut self, ctx: &GpuContext, geometry: &Geometry) -> Result<LbvhStages> {
+        let n = geometry.triangle_count;
+        let mut tree = Tree::empty(ctx)?;
+        self.reserve(ctx, n)?;
+        tree.reserve(ctx, 2 * n - 1, n)?;
+        let mut params = ParamSlab::new(ctx);
+        let mut rec = Recorder::new(ctx, &mut params, None);
+        let input = LbvhInput::Triangles {
+            buffer: &geometry.triangles,
+            count: n,
+        };
+        self.record_keys(&mut rec, input, &tree.prim_indices);
+        rec.submit();
+        let scratch = self.scratch.as_ref().expect("reserved");
         let bounds_node: Vec<BvhNode> =
             read_buffer(ctx, scratch.bounds_levels.last().expect("one level"), 1)?;
         let keys = read_keys(ctx, &scratch.keys, n)?;
-        let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        self.record_tree(ctx, &mut encoder, scene, n, &mut timer)?;
-        ctx.queue.submit([encoder.finish()]);
-        let scratch = self.scratch.as_ref().expect("prepared");
+        let mut rec = Recorder::new(ctx, &mut params, None);
+        self.record_tree(&mut rec, input.count(), &tree.nodes, &tree.prim_indices)?;
+        rec.submit();
+        let scratch = self.scratch.as_ref().expect("reserved");
+        let sorted_prims: Vec<u32> = read_buffer(ctx, &tree.prim_indices, n as usize)?;
         Ok(LbvhStages {
             centroid_bounds: bounds_node[0].bounds(),
             keys,
             sorted_keys: read_keys(ctx, &scratch.keys, n)?,
-            sorted_prims: read_buffer(ctx, &scene.prim_indices, n as usize)?,
             parents: read_buffer(ctx, &scratch.parents, 2 * n as usize - 1)?,
-            bvh: scene.download_bvh(ctx)?,
+            bvh: Bvh {
+                nodes: read_buffer(ctx, &tree.nodes, 2 * n as usize - 1)?,
+                prim_indices: sorted_prims.clone(),
+            },
+            sorted_prims,
         })
     }
 
-    /// Sizes scratch and output buffers for `n` primitives.
-    fn prepare(&mut self, ctx: &GpuContext, scene: &mut GpuScene, n: u32) -> Result<()> {
-        self.reserve(ctx, n)?;
-        let node_bytes = u64::from(2 * n - 1) * std::mem::size_of::<BvhNode>() as u64;
-        if scene.nodes.size() < node_bytes {
-            scene.nodes = storage_buffer_zeroed(ctx, "bvh nodes", node_bytes)?;
-        }
-        if scene.prim_indices.size() < u64::from(n) * 4 {
-            scene.prim_indices = storage_buffer_zeroed(ctx, "prim indices", u64::from(n) * 4)?;
-        }
-        scene.node_count = 2 * n - 1;
-        scene.prim_count = n;
-        Ok(())
-    }
-
-    /// Stages 0-2: primitive boxes of the triangles (when `from_triangles`), centroid bounds and
-    /// Morton keys (values = identity permutation).
-    fn record_keys(
-        &self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        scene: &GpuScene,
-        n: u32,
-        from_triangles: bool,
-        timer: &mut GpuTimer,
-    ) {
-        let scratch = self.scratch.as_ref().expect("prepared");
-        let prims = Prims {
-            boxes: &scratch.prim_boxes,
-            count: n,
-        };
-        // The level buffers are sized for the capacity; reduce over exactly the levels n needs.
-        let levels = CentroidBounds::level_count(n);
+    /// Stages 0-2: primitive boxes of the triangles (for triangle input), centroid bounds, and
+    /// Morton keys with the identity permutation in `order` (the values the sort reorders).
+    fn record_keys(&self, rec: &mut Recorder<'_>, input: LbvhInput<'_>, order: &wgpu::Buffer) {
+        let count = input.count();
+        let scratch = self.scratch.as_ref().expect("reserved");
+        // The level buffers are sized for the scratch capacity; reduce over the levels the count's
+        // capacity needs.
+        let levels = CentroidsReduce::level_count(count.capacity());
         let bounds_levels = &scratch.bounds_levels[..levels];
         {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("centroid bounds"),
-                timestamp_writes: timer.pass("bounds"),
-            });
-            if from_triangles {
-                self.triangle_bounds.record(
-                    ctx,
-                    &mut pass,
-                    &scene.triangles,
-                    n,
-                    &scratch.prim_boxes,
-                );
+            let mut pass = rec.pass("bounds");
+            if let LbvhInput::Triangles { buffer, count } = input {
+                self.triangles_bounds
+                    .record(&mut pass, buffer, count, &scratch.prim_boxes);
             }
-            self.bounds
-                .record(ctx, &mut pass, &scratch.prim_boxes, n, bounds_levels, true);
+            self.centroids
+                .record(&mut pass, &scratch.prim_boxes, count, bounds_levels, true);
         }
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("morton keys"),
-            timestamp_writes: timer.pass("morton"),
-        });
+        let mut pass = rec.pass("morton");
         self.morton.record(
-            ctx,
             &mut pass,
-            &prims,
-            scene,
+            &scratch.prim_boxes,
+            count,
             &bounds_levels[levels - 1],
             &scratch.keys,
+            order,
         );
     }
 
-    /// Stages 3-5: sort, hierarchy emission, bottom-up bounds.
+    /// Stages 3-5: sort, hierarchy emission, bottom-up bounds into `nodes`, with the leaves'
+    /// primitives in `order`.
     fn record_tree(
         &mut self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        scene: &GpuScene,
-        n: u32,
-        timer: &mut GpuTimer,
+        rec: &mut Recorder<'_>,
+        count: ItemCount<'_>,
+        nodes: &wgpu::Buffer,
+        order: &wgpu::Buffer,
     ) -> Result<()> {
-        let scratch = self.scratch.as_ref().expect("prepared");
-        self.sort.sort(
-            ctx,
-            encoder,
-            &scratch.keys,
-            &scene.prim_indices,
-            n,
-            MORTON_BITS,
-            Some(&mut *timer),
-        )?;
+        let scratch = self.scratch.as_ref().expect("reserved");
+        self.sort
+            .record(rec, &scratch.keys, order, count, MORTON_BITS)?;
         {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("lbvh hierarchy"),
-                timestamp_writes: timer.pass("hierarchy"),
-            });
-            self.hierarchy.record(
-                ctx,
-                &mut pass,
-                &scratch.keys,
-                n,
-                &scene.nodes,
-                &scratch.parents,
-            );
+            let mut pass = rec.pass("hierarchy");
+            self.hierarchy
+                .record(&mut pass, &scratch.keys, count, nodes, &scratch.parents);
         }
-        encoder.clear_buffer(&scratch.arrivals, 0, None);
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("bounds refit"),
-            timestamp_writes: timer.pass("refit"),
-        });
-        let prims = Prims {
-            boxes: &scratch.prim_boxes,
-            count: n,
-        };
+        rec.encoder().clear_buffer(&scratch.arrivals, 0, None);
+        let mut pass = rec.pass("refit");
         self.refit.record(
-            ctx,
             &mut pass,
-            &prims,
-            scene,
+            &scratch.prim_boxes,
+            count,
+            order,
             &scratch.parents,
+            nodes,
             &scratch.arrivals,
         );
         Ok(())

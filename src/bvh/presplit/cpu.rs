@@ -6,14 +6,13 @@
 use glam::{UVec3, Vec3};
 
 use crate::geometry::Aabb;
+use crate::gpu::constants::{MAX_SPLITS, MORTON_GRID};
 use crate::scene::Triangle;
 
-/// Splits per triangle at most (pieces = splits + 1 ≤ 32).
-pub const MAX_SPLITS: u32 = 31;
 /// Bisection steps of the budget search.
 pub const BISECTION_STEPS: u32 = 32;
-const GRID: f32 = 2_097_152.0;
-const GRID_MAX: f32 = 2_097_151.0;
+const GRID: f32 = MORTON_GRID as f32;
+const GRID_MAX: f32 = (MORTON_GRID - 1) as f32;
 
 /// The cubic Morton grid over the scene box.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -3,67 +3,40 @@
 //! budget of β·N extra references. Stages: triangle boxes → scene box (reduction) → split
 //! priorities (`triangles_priority.wgsl`) → split counts under the budget by bisection
 //! (`splits_budget.wgsl`) → reference offsets (exclusive scan) → recursive splitting at Morton-grid
-//! planes (`triangles_split.wgsl`). The total reference count is read back between the counts and
-//! the split (the LBVH stages size their dispatches from it): the one CPU round trip of a split
-//! build. CPU twin: `presplit_cpu`.
+//! planes (`triangles_split.wgsl`). The reference count stays on the GPU: the LBVH stages after
+//! it are sized for N + β·N references and read the count (`gpu::ItemCount`). CPU twin:
+//! `presplit_cpu`.
 
 mod cpu;
+mod splits_budget;
+mod triangles_priority;
+mod triangles_split;
 
 pub use cpu::{
     budget_scale, presplit_cpu, split_importance, split_priority, split_triangle, splits_at,
-    SplitGrid, BISECTION_STEPS, MAX_SPLITS,
+    SplitGrid, BISECTION_STEPS,
 };
+pub use splits_budget::{
+    SPLITS_BISECT_STEP, SPLITS_COUNT, SPLITS_INIT_SEARCH, SPLITS_WRITE_COUNTS,
+};
+pub use triangles_priority::TRIANGLES_PRIORITY;
+pub use triangles_split::TRIANGLES_SPLIT;
 
-use bytemuck::{Pod, Zeroable};
+use splits_budget::BudgetParams;
 
-use super::lbvh::{CentroidBounds, GpuAabb, TriangleBounds};
+use super::lbvh::{CentroidsReduce, TrianglesBounds};
+use crate::device::Geometry;
+use crate::geometry::GpuAabb;
 use crate::gpu::{
-    bind_entry, compute_pipeline, dispatch_grid, read_buffer, storage_buffer_zeroed,
-    uniform_buffer, GpuContext, GpuTimer,
+    read_buffer, storage_buffer_zeroed, GpuContext, Grid, ItemCount, Items, Kernel, ParamSlab,
+    Recorder,
 };
 use crate::sort::PrefixScan;
-use crate::trace::GpuScene;
 use crate::Result;
-
-const WORKGROUP: u32 = 64;
-
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct SplitParams {
-    count: u32,
-    row_pitch: u32,
-    _pad: [u32; 2],
-}
-const _: () = assert!(std::mem::size_of::<SplitParams>() == 16);
-
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct BudgetParams {
-    count: u32,
-    row_pitch: u32,
-    budget: u32,
-    _pad: u32,
-}
-const _: () = assert!(std::mem::size_of::<BudgetParams>() == 16);
 
 /// Extra references allowed for `triangles` triangles at β = `percent` / 100.
 pub fn split_budget(triangles: u32, percent: u32) -> u32 {
     (u64::from(triangles) * u64::from(percent) / 100) as u32
-}
-
-/// The grid and parameters of a per-triangle pre-splitting kernel over `n` triangles.
-fn per_triangle_params(ctx: &GpuContext, n: u32) -> ((u32, u32), wgpu::Buffer) {
-    let (gx, gy) = dispatch_grid(ctx, n, WORKGROUP);
-    let params = uniform_buffer(
-        ctx,
-        "split params",
-        &SplitParams {
-            count: n,
-            row_pitch: gx * WORKGROUP,
-            _pad: [0; 2],
-        },
-    );
-    ((gx, gy), params)
 }
 
 /// One run of the stage read back (tests): each triangle's priority q, the budget scale E the
@@ -85,16 +58,16 @@ struct Scratch {
     ref_offsets: wgpu::Buffer,
 }
 
-/// Pipelines and scratch of the pre-splitting stage, reused per frame.
+/// Kernels and scratch of the pre-splitting stage, reused per frame.
 pub struct PreSplitter {
-    triangle_bounds: TriangleBounds,
-    scene_bounds: CentroidBounds,
-    priority: wgpu::ComputePipeline,
-    init_search: wgpu::ComputePipeline,
-    count_splits: wgpu::ComputePipeline,
-    bisect_step: wgpu::ComputePipeline,
-    write_counts: wgpu::ComputePipeline,
-    split: wgpu::ComputePipeline,
+    triangle_bounds: TrianglesBounds,
+    scene_bounds: CentroidsReduce,
+    priority: Kernel<Items>,
+    init_search: Kernel<BudgetParams>,
+    count_splits: Kernel<BudgetParams>,
+    bisect_step: Kernel<BudgetParams>,
+    write_counts: Kernel<BudgetParams>,
+    split: Kernel<Items>,
     scan: PrefixScan,
     scratch: Option<Scratch>,
     ref_tris: Option<wgpu::Buffer>,
@@ -102,205 +75,148 @@ pub struct PreSplitter {
 
 impl PreSplitter {
     pub fn new(ctx: &GpuContext) -> Self {
-        let budget = |entry| compute_pipeline(ctx, "splits_budget.wgsl", entry);
         Self {
-            triangle_bounds: TriangleBounds::new(ctx),
-            scene_bounds: CentroidBounds::new(ctx),
-            priority: compute_pipeline(ctx, "triangles_priority.wgsl", "main"),
-            init_search: budget("init_search"),
-            count_splits: budget("count_splits"),
-            bisect_step: budget("bisect_step"),
-            write_counts: budget("write_counts"),
-            split: compute_pipeline(ctx, "triangles_split.wgsl", "main"),
+            triangle_bounds: TrianglesBounds::new(ctx),
+            scene_bounds: CentroidsReduce::new(ctx),
+            priority: Kernel::new(ctx, &TRIANGLES_PRIORITY),
+            init_search: Kernel::new(ctx, &SPLITS_INIT_SEARCH),
+            count_splits: Kernel::new(ctx, &SPLITS_COUNT),
+            bisect_step: Kernel::new(ctx, &SPLITS_BISECT_STEP),
+            write_counts: Kernel::new(ctx, &SPLITS_WRITE_COUNTS),
+            split: Kernel::new(ctx, &TRIANGLES_SPLIT),
             scan: PrefixScan::new(ctx),
             scratch: None,
             ref_tris: None,
         }
     }
 
-    /// Records steps 1-2 and the offsets scan for the scene's triangles with `budget` extra
-    /// references; `read_total` gives the reference count after submission.
-    pub fn record_counts(
+    /// References there can be for `triangles` triangles with `budget` extra ones.
+    pub fn capacity(triangles: u32, budget: u32) -> u32 {
+        triangles.saturating_add(budget)
+    }
+
+    /// Records the whole stage for `geometry`'s triangles with `budget` extra references (passes
+    /// "split counts" and "split"): the reference boxes into `prim_boxes` (room for
+    /// `capacity(n, budget)` boxes) and their triangles into `ref_tris()`. The reference count is
+    /// computed on the GPU and stays there: `total()` holds it after the recording ran.
+    pub fn record(
         &mut self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        scene: &GpuScene,
+        rec: &mut Recorder<'_>,
+        geometry: &Geometry,
         budget: u32,
-        timer: &mut GpuTimer,
+        prim_boxes: &wgpu::Buffer,
     ) -> Result<()> {
-        let n = scene.triangle_count;
+        let ctx = rec.ctx;
+        let n = geometry.triangle_count;
+        let capacity = Self::capacity(n, budget);
         if self.scratch.as_ref().is_none_or(|s| s.capacity < n) {
             self.scratch = None;
             self.scratch = Some(Scratch {
                 capacity: n,
                 tri_boxes: storage_buffer_zeroed(ctx, "triangle boxes", u64::from(n) * 32)?,
-                bounds_levels: CentroidBounds::level_buffers(ctx, n)?,
+                bounds_levels: CentroidsReduce::level_buffers(ctx, n)?,
                 priorities: storage_buffer_zeroed(ctx, "split priorities", u64::from(n) * 4)?,
                 budget_state: storage_buffer_zeroed(ctx, "split budget state", 32)?,
                 ref_offsets: storage_buffer_zeroed(ctx, "reference offsets", u64::from(n) * 4)?,
             });
         }
-        let plan = self.scan.plan(
-            ctx,
-            &self.scratch.as_ref().expect("allocated").ref_offsets,
-            n,
-        )?;
-        let s = self.scratch.as_ref().expect("allocated");
-        let ((gx, gy), split_params) = per_triangle_params(ctx, n);
-        let budget_params = uniform_buffer(
-            ctx,
-            "budget params",
-            &BudgetParams {
-                count: n,
-                row_pitch: gx * WORKGROUP,
-                budget,
-                _pad: 0,
-            },
-        );
-        let levels = CentroidBounds::level_count(n);
-        let scene_box = &s.bounds_levels[levels - 1];
-        let priority_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("triangles_priority"),
-            layout: &self.priority.get_bind_group_layout(0),
-            entries: &[
-                bind_entry(0, &split_params),
-                bind_entry(1, &scene.triangles),
-                bind_entry(2, &s.priorities),
-                bind_entry(3, &s.budget_state),
-                bind_entry(6, scene_box),
-            ],
-        });
-        let budget_group =
-            |pipeline: &wgpu::ComputePipeline, with_counts: bool, with_priorities: bool| {
-                let mut entries = vec![
-                    bind_entry(0, &budget_params),
-                    bind_entry(2, &s.budget_state),
-                ];
-                if with_priorities {
-                    entries.push(bind_entry(1, &s.priorities));
-                }
-                if with_counts {
-                    entries.push(bind_entry(3, &s.ref_offsets));
-                }
-                ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("splits_budget"),
-                    layout: &pipeline.get_bind_group_layout(0),
-                    entries: &entries,
-                })
-            };
-        let init_group = budget_group(&self.init_search, false, false);
-        let count_group = budget_group(&self.count_splits, false, true);
-        let step_group = budget_group(&self.bisect_step, false, false);
-        let write_group = budget_group(&self.write_counts, true, true);
-        encoder.clear_buffer(&s.budget_state, 0, None);
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("split counts"),
-            timestamp_writes: timer.pass("split counts"),
-        });
-        self.triangle_bounds
-            .record(ctx, &mut pass, &scene.triangles, n, &s.tri_boxes);
-        self.scene_bounds.record(
-            ctx,
-            &mut pass,
-            &s.tri_boxes,
-            n,
-            &s.bounds_levels[..levels],
-            false,
-        );
-        pass.set_pipeline(&self.priority);
-        pass.set_bind_group(0, &priority_group, &[]);
-        pass.dispatch_workgroups(gx, gy, 1);
-        pass.set_pipeline(&self.init_search);
-        pass.set_bind_group(0, &init_group, &[]);
-        pass.dispatch_workgroups(1, 1, 1);
-        for _ in 0..BISECTION_STEPS {
-            pass.set_pipeline(&self.count_splits);
-            pass.set_bind_group(0, &count_group, &[]);
-            pass.dispatch_workgroups(gx, gy, 1);
-            pass.set_pipeline(&self.bisect_step);
-            pass.set_bind_group(0, &step_group, &[]);
-            pass.dispatch_workgroups(1, 1, 1);
-        }
-        pass.set_pipeline(&self.write_counts);
-        pass.set_bind_group(0, &write_group, &[]);
-        pass.dispatch_workgroups(gx, gy, 1);
-        self.scan.record(&mut pass, &plan);
-        Ok(())
-    }
-
-    /// Total references after the recorded counts were submitted (triangles + splits).
-    pub fn read_total(&self, ctx: &GpuContext) -> Result<u32> {
-        Ok(read_buffer::<u32>(ctx, self.scan.total(), 1)?[0])
-    }
-
-    /// Records step 3: writes `total` reference boxes into `prim_boxes` and their triangles into
-    /// `ref_tris()`.
-    pub fn record_split(
-        &mut self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        scene: &GpuScene,
-        total: u32,
-        prim_boxes: &wgpu::Buffer,
-        timer: &mut GpuTimer,
-    ) -> Result<()> {
         if self
             .ref_tris
             .as_ref()
-            .is_none_or(|b| b.size() < u64::from(total) * 4)
+            .is_none_or(|b| b.size() < u64::from(capacity) * 4)
         {
+            self.ref_tris = None;
             self.ref_tris = Some(storage_buffer_zeroed(
                 ctx,
                 "reference triangles",
-                u64::from(total) * 4,
+                u64::from(capacity) * 4,
             )?);
         }
-        let n = scene.triangle_count;
-        let s = self.scratch.as_ref().expect("record_counts first");
-        let ((gx, gy), params) = per_triangle_params(ctx, n);
-        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("triangles_split"),
-            layout: &self.split.get_bind_group_layout(0),
-            entries: &[
-                bind_entry(0, &params),
-                bind_entry(1, &scene.triangles),
-                bind_entry(2, &s.ref_offsets),
-                bind_entry(3, self.scan.total()),
-                bind_entry(4, prim_boxes),
-                bind_entry(5, self.ref_tris.as_ref().expect("allocated above")),
-                bind_entry(6, &s.bounds_levels[CentroidBounds::level_count(n) - 1]),
+        self.scan.reserve(ctx, n)?;
+        let s = self.scratch.as_ref().expect("allocated");
+        let ref_tris = self.ref_tris.as_ref().expect("allocated");
+        let levels = CentroidsReduce::level_count(n);
+        let scene_box = &s.bounds_levels[levels - 1];
+        let grid = self.priority.grid(ctx, n);
+        let budget_params = BudgetParams {
+            count: n,
+            row_pitch: grid.row_pitch,
+            budget,
+            _pad: 0,
+        };
+        let one = Grid::workgroups(1, 1);
+        let budget_buffers = [&s.priorities, &s.budget_state, &s.ref_offsets];
+        rec.encoder().clear_buffer(&s.budget_state, 0, None);
+        {
+            let mut pass = rec.pass("split counts");
+            self.triangle_bounds
+                .record(&mut pass, &geometry.triangles, n, &s.tri_boxes);
+            self.scene_bounds.record(
+                &mut pass,
+                &s.tri_boxes,
+                ItemCount::Known(n),
+                &s.bounds_levels[..levels],
+                false,
+            );
+            pass.dispatch(
+                &self.priority,
+                grid,
+                &Items::new(n, grid),
+                &[
+                    &geometry.triangles,
+                    &s.priorities,
+                    &s.budget_state,
+                    scene_box,
+                ],
+            );
+            pass.dispatch(&self.init_search, one, &budget_params, &budget_buffers);
+            for _ in 0..BISECTION_STEPS {
+                pass.dispatch(&self.count_splits, grid, &budget_params, &budget_buffers);
+                pass.dispatch(&self.bisect_step, one, &budget_params, &budget_buffers);
+            }
+            pass.dispatch(&self.write_counts, grid, &budget_params, &budget_buffers);
+            self.scan.record(&mut pass, &s.ref_offsets, n)?;
+        }
+        let mut pass = rec.pass("split");
+        pass.dispatch_items(
+            &self.split,
+            n,
+            &[
+                &geometry.triangles,
+                &s.ref_offsets,
+                self.scan.total(),
+                prim_boxes,
+                ref_tris,
+                scene_box,
             ],
-        });
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("split"),
-            timestamp_writes: timer.pass("split"),
-        });
-        pass.set_pipeline(&self.split);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(gx, gy, 1);
+        );
         Ok(())
     }
 
-    /// Runs the whole stage for the scene's triangles and reads its results back (tests).
+    /// The reference count of the last recorded stage (triangles + splits; one u32), written on
+    /// the GPU.
+    pub fn total(&self) -> &wgpu::Buffer {
+        self.scan.total()
+    }
+
+    /// Runs the whole stage for `geometry`'s triangles and reads its results back (tests).
     pub fn split_stages(
         &mut self,
         ctx: &GpuContext,
-        scene: &GpuScene,
+        geometry: &Geometry,
         budget: u32,
     ) -> Result<SplitStages> {
-        let mut timer = GpuTimer::new(ctx, 2);
-        let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        self.record_counts(ctx, &mut encoder, scene, budget, &mut timer)?;
-        ctx.queue.submit([encoder.finish()]);
-        let total = self.read_total(ctx)?;
-        let boxes = storage_buffer_zeroed(ctx, "reference boxes", u64::from(total) * 32)?;
-        let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        self.record_split(ctx, &mut encoder, scene, total, &boxes, &mut timer)?;
-        ctx.queue.submit([encoder.finish()]);
+        let capacity = Self::capacity(geometry.triangle_count, budget);
+        let boxes = storage_buffer_zeroed(ctx, "reference boxes", u64::from(capacity) * 32)?;
+        let mut params = ParamSlab::new(ctx);
+        let mut rec = Recorder::new(ctx, &mut params, None);
+        self.record(&mut rec, geometry, budget, &boxes)?;
+        rec.submit();
+        let total = read_buffer::<u32>(ctx, self.total(), 1)?[0];
         let s = self.scratch.as_ref().expect("recorded above");
         let state: Vec<u32> = read_buffer(ctx, &s.budget_state, 3)?;
         Ok(SplitStages {
-            priorities: read_buffer(ctx, &s.priorities, scene.triangle_count as usize)?,
+            priorities: read_buffer(ctx, &s.priorities, geometry.triangle_count as usize)?,
             scale: f32::from_bits(state[2]),
             boxes: read_buffer(ctx, &boxes, total as usize)?,
             ref_tris: read_buffer(

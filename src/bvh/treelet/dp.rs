@@ -8,8 +8,7 @@ use glam::Vec3;
 
 use crate::bvh::SahParams;
 
-/// Largest supported treelet (leaves); 2^8 subsets fit the kernel's workgroup memory.
-pub const MAX_TREELET_SIZE: u32 = 8;
+use crate::gpu::constants::MAX_TREELET_SIZE;
 
 /// SAH constants and the collapse limit the DP and the node costs use.
 #[derive(Clone, Copy, Debug, PartialEq)]

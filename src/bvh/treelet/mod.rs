@@ -2,34 +2,40 @@
 //! Construction of High-Quality Bounding Volume Hierarchies", §3-4), then leaf collapse and
 //! compaction into the traversal layout.
 //!
-//! Per build, all in one submission: the GPU LBVH (`bvh::lbvh`), `rounds` restructuring rounds
-//! (γ = treelet size, doubling each round), the collapse. Each part has a CPU twin
-//! (`build_trbvh_cpu`) that produces the identical tree, used as the test oracle.
+//! Per build, recorded into one recording: the GPU LBVH (`bvh::lbvh`) into a working tree,
+//! `rounds` restructuring rounds (kernel `treelet_optimize`; γ = treelet size, doubling each
+//! round), the collapse into the output tree (`collapse`: kernels `nodes_mark`, `nodes_compact`).
+//! Each part has a CPU twin (`build_trbvh_cpu`), the test oracle.
 
 mod collapse;
 mod cpu;
 mod dp;
-mod optimize;
+mod nodes_compact;
+mod nodes_mark;
+mod treelet_optimize;
 
 pub use cpu::WorkingTree;
-pub use dp::{
-    solve_treelet, surface_area, CostModel, TreeletLeaf, TreeletSolution, MAX_TREELET_SIZE,
-};
+pub use dp::{solve_treelet, surface_area, CostModel, TreeletLeaf, TreeletSolution};
+pub use nodes_compact::NODES_COMPACT;
+pub use nodes_mark::NODES_MARK;
+pub use treelet_optimize::TREELET_OPTIMIZE;
+
+pub use crate::gpu::constants::{MAX_GPU_LEAF_SIZE, MAX_TREELET_SIZE};
 
 use collapse::{Collapse, CollapseBuffers};
-use optimize::{Round, TreeletOptimizer, TreeletState};
+use treelet_optimize::{Round, TreeletOptimize, TreeletState};
 
-use super::lbvh::{build_lbvh_from_boxes_cpu, prim_boxes_cpu, LbvhBuilder};
+use super::lbvh::{build_lbvh_from_boxes_cpu, prim_boxes_cpu, LbvhBuilder, LbvhInput, LBVH_PASSES};
 use super::presplit::{presplit_cpu, split_budget, PreSplitter};
 use super::{Bvh, BvhNode, SahParams};
+use crate::device::{Geometry, Tree};
 use crate::geometry::Aabb;
-use crate::gpu::{read_buffer, storage_buffer_zeroed, GpuContext, GpuTimer, StageTime};
+use crate::gpu::{
+    read_buffer, storage_buffer_zeroed, GpuContext, GpuTimer, ItemCount, ParamSlab, Recorder,
+    StageTime,
+};
 use crate::scene::Triangle;
-use crate::trace::GpuScene;
 use crate::{Error, Result};
-
-/// Largest leaf the GPU collapse may create (its gather stack holds a leaf's subtree).
-pub const MAX_GPU_LEAF_SIZE: u32 = 32;
 
 /// Treelet optimizer settings (presets as named constants; the paper's setting is `BALANCED`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -175,18 +181,18 @@ pub fn optimize_lbvh_cpu(
     tree
 }
 
-/// Scratch space for up to `capacity` triangles.
+/// Scratch space for working trees of up to `capacity` leaves.
 struct Scratch {
     capacity: u32,
+    /// The working tree: nodes in the LBVH layout and the primitive of each leaf.
+    nodes: wgpu::Buffer,
+    order: wgpu::Buffer,
     prim_counts: wgpu::Buffer,
     costs: wgpu::Buffer,
     arrivals: wgpu::Buffer,
     flags: wgpu::Buffer,
     kept_scan: wgpu::Buffer,
     leaf_prim_scan: wgpu::Buffer,
-    out_nodes: wgpu::Buffer,
-    out_prims: wgpu::Buffer,
-    tree_counts: wgpu::Buffer,
 }
 
 impl Scratch {
@@ -194,19 +200,18 @@ impl Scratch {
         let nodes = u64::from(2 * capacity - 1);
         Ok(Self {
             capacity,
+            nodes: storage_buffer_zeroed(
+                ctx,
+                "treelet working nodes",
+                nodes * std::mem::size_of::<BvhNode>() as u64,
+            )?,
+            order: storage_buffer_zeroed(ctx, "treelet working order", u64::from(capacity) * 4)?,
             prim_counts: storage_buffer_zeroed(ctx, "treelet prim counts", nodes * 4)?,
             costs: storage_buffer_zeroed(ctx, "treelet costs", nodes * 4)?,
             arrivals: storage_buffer_zeroed(ctx, "treelet arrivals", u64::from(capacity) * 4)?,
             flags: storage_buffer_zeroed(ctx, "collapse flags", nodes * 4)?,
             kept_scan: storage_buffer_zeroed(ctx, "collapse kept scan", nodes * 4)?,
             leaf_prim_scan: storage_buffer_zeroed(ctx, "collapse leaf scan", nodes * 4)?,
-            out_nodes: storage_buffer_zeroed(
-                ctx,
-                "bvh nodes",
-                nodes * std::mem::size_of::<BvhNode>() as u64,
-            )?,
-            out_prims: storage_buffer_zeroed(ctx, "prim indices", u64::from(capacity) * 4)?,
-            tree_counts: storage_buffer_zeroed(ctx, "tree counts", 8)?,
         })
     }
 }
@@ -220,18 +225,21 @@ pub struct TrbvhStages {
     pub bvh: Bvh,
 }
 
-/// The trees around the rounds of one build: the LBVH before them and the working tree after.
-type RoundTrees = (WorkingTree, WorkingTree);
-
-/// GPU TRBVH builder: LBVH + treelet rounds + collapse, pipelines and scratch reused per frame.
+/// GPU TRBVH builder: LBVH + treelet rounds + collapse, kernels and scratch reused per frame.
 pub struct TrbvhBuilder {
     lbvh: LbvhBuilder,
     presplit: Option<PreSplitter>,
-    optimizer: TreeletOptimizer,
+    optimizer: TreeletOptimize,
     collapse: Collapse,
     scratch: Option<Scratch>,
+    /// Leaves the last build's working tree had room for.
+    last_capacity: u32,
+    /// The last build pre-split its triangles (its leaf count is on the GPU).
+    last_split: bool,
     pub settings: TreeletSettings,
     pub sah: SahParams,
+    /// Parameters of the builds this builder records and submits itself (`build`).
+    params: ParamSlab,
 }
 
 impl TrbvhBuilder {
@@ -240,153 +248,197 @@ impl TrbvhBuilder {
         Ok(Self {
             lbvh: LbvhBuilder::new(ctx),
             presplit: None,
-            optimizer: TreeletOptimizer::new(ctx),
+            optimizer: TreeletOptimize::new(ctx),
             collapse: Collapse::new(ctx)?,
             scratch: None,
+            last_capacity: 0,
+            last_split: false,
             settings,
             sah,
+            params: ParamSlab::new(ctx),
         })
     }
 
-    /// Builds the optimized tree of `scene` into its `nodes`/`prim_indices`; returns stage times.
-    pub fn build(&mut self, ctx: &GpuContext, scene: &mut GpuScene) -> Result<Vec<StageTime>> {
-        self.build_inner(ctx, scene, false)
-            .map(|(stages, _)| stages)
+    /// Timestamped passes one build records.
+    pub fn pass_count(&self) -> u32 {
+        LBVH_PASSES + 3 + self.settings.gammas().len() as u32
     }
 
-    /// Like `build`, in two submissions, reading back the LBVH before the rounds and the working
-    /// tree after them (tests).
-    pub fn build_stages(&mut self, ctx: &GpuContext, scene: &mut GpuScene) -> Result<TrbvhStages> {
-        let (_, trees) = self.build_inner(ctx, scene, true)?;
-        let (lbvh, working) = trees.expect("requested");
+    /// Builds `geometry`'s optimized tree into `tree` and waits; returns the stage times.
+    pub fn build(
+        &mut self,
+        ctx: &GpuContext,
+        geometry: &Geometry,
+        tree: &mut Tree,
+    ) -> Result<Vec<StageTime>> {
+        let mut timer = GpuTimer::new(ctx, self.pass_count());
+        let mut params = std::mem::replace(&mut self.params, ParamSlab::new(ctx));
+        let result = {
+            let mut rec = Recorder::new(ctx, &mut params, Some(&mut timer));
+            let result = self.record_inner(&mut rec, geometry, tree, None);
+            rec.submit();
+            result
+        };
+        self.params = params;
+        result?;
+        timer.read(ctx)
+    }
+
+    /// Records a build of `geometry`'s optimized tree into `tree` (grown as needed).
+    pub fn record(
+        &mut self,
+        rec: &mut Recorder<'_>,
+        geometry: &Geometry,
+        tree: &mut Tree,
+    ) -> Result<()> {
+        self.record_inner(rec, geometry, tree, None)
+    }
+
+    /// Like `build`, reading back the LBVH before the rounds and the working tree after them
+    /// (tests).
+    pub fn build_stages(&mut self, ctx: &GpuContext, geometry: &Geometry) -> Result<TrbvhStages> {
+        let mut tree = Tree::empty(ctx)?;
+        let mut trees = None;
+        let mut params = ParamSlab::new(ctx);
+        let mut rec = Recorder::new(ctx, &mut params, None);
+        self.record_inner(&mut rec, geometry, &mut tree, Some(&mut trees))?;
+        rec.submit();
+        let lbvh = trees.take().expect("requested");
+        let working = self.read_working(ctx)?;
         Ok(TrbvhStages {
             lbvh,
             working,
-            bvh: scene.download_bvh(ctx)?,
+            bvh: tree.download(ctx)?,
         })
     }
 
-    fn build_inner(
+    /// The working tree of the last build (after its rounds), read back.
+    fn read_working(&self, ctx: &GpuContext) -> Result<WorkingTree> {
+        let s = self.scratch.as_ref().expect("built");
+        let parents = self.lbvh.parents().expect("built");
+        let n = self.read_leaf_count(ctx)?;
+        let count = (2 * n - 1) as usize;
+        Ok(WorkingTree {
+            nodes: read_buffer(ctx, &s.nodes, count)?,
+            parents: read_buffer(ctx, parents, count)?,
+            prims: read_buffer(ctx, &s.order, n as usize)?,
+            prim_counts: read_buffer(ctx, &s.prim_counts, count)?,
+            costs: read_buffer(ctx, &s.costs, count)?,
+        })
+    }
+
+    /// Leaves of the last build's working tree, read back (tests).
+    fn read_leaf_count(&self, ctx: &GpuContext) -> Result<u32> {
+        match (&self.presplit, self.last_split) {
+            (Some(splitter), true) => Ok(read_buffer::<u32>(ctx, splitter.total(), 1)?[0]),
+            _ => Ok(self.last_capacity),
+        }
+    }
+
+    /// Records the build; with `lbvh_out`, flushes after the LBVH and reads it back (tests).
+    fn record_inner(
         &mut self,
-        ctx: &GpuContext,
-        scene: &mut GpuScene,
-        read_trees: bool,
-    ) -> Result<(Vec<StageTime>, Option<RoundTrees>)> {
+        rec: &mut Recorder<'_>,
+        geometry: &Geometry,
+        tree: &mut Tree,
+        lbvh_out: Option<&mut Option<WorkingTree>>,
+    ) -> Result<()> {
         self.settings.validate(&self.sah)?;
-        let gammas = self.settings.gammas();
-        let mut timer = GpuTimer::new(ctx, 8 + gammas.len() as u32);
-        let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        let budget = split_budget(scene.triangle_count, self.settings.split_percent);
+        let ctx = rec.ctx;
+        let budget = split_budget(geometry.triangle_count, self.settings.split_percent);
+        // The leaves: the triangles, or the references of pre-splitting (counted on the GPU).
         let n = if budget == 0 {
-            self.lbvh.record(ctx, &mut encoder, scene, &mut timer)?
+            geometry.triangle_count
         } else {
-            // Split counts, then (after reading the reference count back) the split and the LBVH
-            // over the references.
-            let splitter = self.presplit.get_or_insert_with(|| PreSplitter::new(ctx));
-            splitter.record_counts(ctx, &mut encoder, scene, budget, &mut timer)?;
-            ctx.queue.submit([encoder.finish()]);
-            let total = splitter.read_total(ctx)?;
-            encoder = ctx.device.create_command_encoder(&Default::default());
-            self.lbvh.reserve(ctx, total)?;
-            let prim_boxes = self.lbvh.prim_boxes().expect("reserved");
-            splitter.record_split(ctx, &mut encoder, scene, total, prim_boxes, &mut timer)?;
-            self.lbvh
-                .record_prims(ctx, &mut encoder, scene, total, &mut timer)?
+            PreSplitter::capacity(geometry.triangle_count, budget)
         };
-        if self.scratch.as_ref().is_none_or(|s| s.capacity < n) {
-            self.scratch = None;
-            self.scratch = Some(Scratch::new(ctx, n)?);
-        }
-        let scratch = self.scratch.as_mut().expect("allocated above");
-        // The output buffers swap with the scene's each build, so they may come from a smaller scene.
-        let node_bytes = u64::from(2 * n - 1) * std::mem::size_of::<BvhNode>() as u64;
-        if scratch.out_nodes.size() < node_bytes {
-            scratch.out_nodes = storage_buffer_zeroed(ctx, "bvh nodes", node_bytes)?;
-        }
-        if scratch.out_prims.size() < u64::from(n) * 4 {
-            scratch.out_prims = storage_buffer_zeroed(ctx, "prim indices", u64::from(n) * 4)?;
-        }
-        let scratch = &*scratch;
-        let parents = self.lbvh.parents().expect("recorded above");
-        let read_tree = |ctx: &GpuContext| -> Result<WorkingTree> {
-            let count = (2 * n - 1) as usize;
-            Ok(WorkingTree {
-                nodes: read_buffer(ctx, &scene.nodes, count)?,
-                parents: read_buffer(ctx, parents, count)?,
-                prims: read_buffer(ctx, &scene.prim_indices, n as usize)?,
-                prim_counts: read_buffer(ctx, &scratch.prim_counts, count)?,
-                costs: read_buffer(ctx, &scratch.costs, count)?,
-            })
-        };
-        let lbvh = if read_trees {
-            ctx.queue.submit([encoder.finish()]);
-            encoder = ctx.device.create_command_encoder(&Default::default());
-            let tree = read_tree(ctx)?;
-            Some(WorkingTree::from_lbvh(
-                Bvh {
-                    nodes: tree.nodes,
-                    prim_indices: tree.prims,
-                },
-                tree.parents,
-            ))
-        } else {
+        let scratch = self.reserve(ctx, n)?;
+        let (nodes, order) = (scratch.nodes.clone(), scratch.order.clone());
+        let split_total = if budget == 0 {
             None
+        } else {
+            self.lbvh.reserve(ctx, n)?;
+            let prim_boxes = self.lbvh.prim_boxes().expect("reserved").clone();
+            let splitter = self.presplit.get_or_insert_with(|| PreSplitter::new(ctx));
+            splitter.record(rec, geometry, budget, &prim_boxes)?;
+            Some(splitter.total().clone())
         };
+        let (count, input) = match &split_total {
+            None => (
+                ItemCount::Known(n),
+                LbvhInput::Triangles {
+                    buffer: &geometry.triangles,
+                    count: n,
+                },
+            ),
+            Some(total) => {
+                let count = ItemCount::OnGpu {
+                    buffer: total,
+                    capacity: n,
+                };
+                (count, LbvhInput::PrimBoxes(count))
+            }
+        };
+        self.lbvh.record_into(rec, input, &nodes, &order)?;
+        self.last_capacity = n;
+        self.last_split = split_total.is_some();
+        if let Some(out) = lbvh_out {
+            rec.flush();
+            let n = self.read_leaf_count(ctx)?;
+            let s = self.scratch.as_ref().expect("reserved");
+            let count = (2 * n - 1) as usize;
+            *out = Some(WorkingTree::from_lbvh(
+                Bvh {
+                    nodes: read_buffer(ctx, &s.nodes, count)?,
+                    prim_indices: read_buffer(ctx, &s.order, n as usize)?,
+                },
+                read_buffer(ctx, self.lbvh.parents().expect("built"), count)?,
+            ));
+        }
+        tree.reserve(ctx, 2 * n - 1, n)?;
+        self.collapse.reserve(ctx, n)?;
+        let scratch = self.scratch.as_ref().expect("reserved");
         let state = TreeletState {
-            parents,
+            nodes: &scratch.nodes,
+            parents: self.lbvh.parents().expect("built"),
             prim_counts: &scratch.prim_counts,
             costs: &scratch.costs,
             arrivals: &scratch.arrivals,
         };
         let model = CostModel::from(&self.sah);
-        for gamma in gammas {
-            encoder.clear_buffer(&scratch.arrivals, 0, None);
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("treelet round"),
-                timestamp_writes: timer.pass("treelets"),
-            });
+        for gamma in self.settings.gammas() {
+            rec.encoder().clear_buffer(&scratch.arrivals, 0, None);
+            let mut pass = rec.pass("treelets");
             let round = Round {
                 model,
                 treelet_size: self.settings.treelet_size,
                 gamma,
             };
-            self.optimizer.record(ctx, &mut pass, scene, &state, &round);
+            self.optimizer.record(&mut pass, count, &state, &round);
         }
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("collapse"),
-                timestamp_writes: timer.pass("collapse"),
-            });
-            let out = CollapseBuffers {
-                flags: &scratch.flags,
-                kept_scan: &scratch.kept_scan,
-                leaf_prim_scan: &scratch.leaf_prim_scan,
-                out_nodes: &scratch.out_nodes,
-                out_prims: &scratch.out_prims,
-                tree_counts: &scratch.tree_counts,
-                ref_tris: if budget == 0 {
-                    None
-                } else {
-                    self.presplit.as_ref().and_then(PreSplitter::ref_tris)
-                },
-            };
-            self.collapse
-                .record(ctx, &mut pass, scene, &state, &model, &out)?;
-        }
-        timer.resolve(&mut encoder);
-        ctx.queue.submit([encoder.finish()]);
-        let stages = timer.read(ctx)?;
-        let trees = match lbvh {
-            Some(lbvh) => Some((lbvh, read_tree(ctx)?)),
-            None => None,
+        let mut pass = rec.pass("collapse");
+        let out = CollapseBuffers {
+            flags: &scratch.flags,
+            kept_scan: &scratch.kept_scan,
+            leaf_prim_scan: &scratch.leaf_prim_scan,
+            out_nodes: &tree.nodes,
+            out_prims: &tree.prim_indices,
+            tree_counts: &tree.counts,
+            ref_tris: split_total
+                .is_some()
+                .then(|| self.presplit.as_ref().and_then(PreSplitter::ref_tris))
+                .flatten(),
         };
-        let counts: Vec<u32> = read_buffer(ctx, &scratch.tree_counts, 2)?;
-        // The compacted tree becomes the scene's; the working buffers become next build's output.
-        let scratch = self.scratch.as_mut().expect("allocated above");
-        std::mem::swap(&mut scene.nodes, &mut scratch.out_nodes);
-        std::mem::swap(&mut scene.prim_indices, &mut scratch.out_prims);
-        scene.node_count = counts[0];
-        scene.prim_count = counts[1];
-        Ok((stages, trees))
+        self.collapse
+            .record(&mut pass, count, &scratch.order, &state, &model, &out)
+    }
+
+    /// Grows the working tree's scratch to `n` leaves.
+    fn reserve(&mut self, ctx: &GpuContext, n: u32) -> Result<&Scratch> {
+        if self.scratch.as_ref().is_none_or(|s| s.capacity < n) {
+            self.scratch = None;
+            self.scratch = Some(Scratch::new(ctx, n)?);
+        }
+        Ok(self.scratch.as_ref().expect("allocated above"))
     }
 }

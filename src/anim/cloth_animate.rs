@@ -1,17 +1,17 @@
 //! The built-in "flag" animation: a cloth flag waving on a pole above a ground plane. The flag is
 //! a deforming grid (`cols` × `rows` cells, two triangles each; 32,000 triangles by default) whose
-//! vertices follow travelling waves that grow away from the pole; `shaders/cloth_animate.wgsl`
-//! computes it every frame, `flag_triangle` is its CPU twin. The pole and the ground are static.
+//! vertices follow travelling waves that grow away from the pole; the kernel
+//! `cloth_animate` computes it every frame, `flag_triangle` is its CPU twin. The pole and the ground are static.
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
 use super::kernel::AnimationKernel;
 use super::{check_triangle_count, AnimateStage, Animation, TimeRange};
-use crate::gpu::{GpuContext, StageTime};
+use crate::device::Geometry;
+use crate::gpu::{kernel, Grid, Recorder, StageTime};
 use crate::scene::meshes::{box_between, grid, icosphere};
 use crate::scene::{Camera, Material, Triangle};
-use crate::trace::GpuScene;
 use crate::Result;
 
 /// Size of the flag in scene units, and where its lower corner at the pole is.
@@ -26,7 +26,10 @@ const FLAG_MATERIAL: u32 = 2;
 /// The kernel's parameters (`FlagParams` in `shaders/cloth_animate.wgsl`).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
-struct FlagParams {
+pub struct FlagParams {
+    count: u32,
+    row_pitch: u32,
+    _pad_a: [u32; 2],
     time: f32,
     width: f32,
     height: f32,
@@ -37,7 +40,8 @@ struct FlagParams {
     material: u32,
     _pad: [u32; 2],
 }
-const _: () = assert!(std::mem::size_of::<FlagParams>() == 48);
+
+kernel!(pub CLOTH_ANIMATE: FlagParams = "cloth_animate"::"main", [64, 1, 1], [ReadWrite]);
 
 impl FlagParams {
     fn vertex(&self, i: u32, j: u32) -> Vec3 {
@@ -74,7 +78,7 @@ pub struct Flag {
     rows: u32,
     static_triangles: Vec<Triangle>,
     materials: Vec<Material>,
-    kernel: Option<AnimationKernel>,
+    kernel: Option<AnimationKernel<FlagParams>>,
 }
 
 impl Flag {
@@ -131,6 +135,9 @@ impl Flag {
 
     fn params(&self, time: f32) -> FlagParams {
         FlagParams {
+            count: self.animated_count(),
+            row_pitch: 0,
+            _pad_a: [0; 2],
             time,
             width: WIDTH,
             height: HEIGHT,
@@ -185,14 +192,23 @@ impl Animation for Flag {
         out.extend_from_slice(&self.static_triangles);
     }
 
-    fn animate(&mut self, ctx: &GpuContext, t: f32, scene: &mut GpuScene) -> Result<StageTime> {
-        check_triangle_count(self, scene)?;
+    fn animate(
+        &mut self,
+        rec: &mut Recorder<'_>,
+        t: f32,
+        geometry: &Geometry,
+    ) -> Result<Option<StageTime>> {
+        check_triangle_count(self, geometry)?;
         let params = self.params(t);
-        let count = self.animated_count();
-        let kernel = self.kernel.get_or_insert_with(|| {
-            AnimationKernel::new(ctx, "cloth_animate.wgsl", count, &params, Vec::new())
-        });
-        kernel.run(ctx, &params, &scene.triangles)
+        let kernel = self
+            .kernel
+            .get_or_insert_with(|| AnimationKernel::new(rec.ctx, &CLOTH_ANIMATE, Vec::new()));
+        let row_pitch = |grid: Grid| FlagParams {
+            row_pitch: grid.row_pitch,
+            ..params
+        };
+        kernel.record(rec, params.count, row_pitch, &geometry.triangles);
+        Ok(None)
     }
 }
 

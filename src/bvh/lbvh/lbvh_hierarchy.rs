@@ -1,21 +1,10 @@
 //! LBVH stage 4: hierarchy emission, one invocation per internal node (Karras 2012 §4, Figure 4;
-//! `shaders/lbvh_hierarchy.wgsl`), and its CPU twin. Internal nodes are 0..n-2 (root 0), leaf j is
+//! kernel `lbvh_hierarchy`), and its CPU twin. Internal nodes are 0..n-2 (root 0), leaf j is
 //! node n-1+j; duplicate keys are ordered by index in every δ evaluation.
 
-use bytemuck::{Pod, Zeroable};
+use crate::gpu::{kernel, Grid, ItemCount, Items, Kernel, Pass};
 
-use crate::gpu::{bind_entry, compute_pipeline, dispatch_grid, uniform_buffer, GpuContext};
-
-const WORKGROUP: u32 = 64;
-
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct HierarchyParams {
-    count: u32,
-    row_pitch: u32,
-    _pad: [u32; 2],
-}
-const _: () = assert!(std::mem::size_of::<HierarchyParams>() == 16);
+kernel!(pub LBVH_HIERARCHY: Items = "lbvh_hierarchy"::"main", [64, 1, 1], [Read, ReadWrite, ReadWrite, Read]);
 
 /// Children (left, right) of each internal node and the parent of every node (root: u32::MAX).
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -91,52 +80,38 @@ pub fn hierarchy_cpu(sorted_keys: &[u64]) -> Hierarchy {
     Hierarchy { children, parents }
 }
 
-pub(crate) struct HierarchyEmission {
-    pipeline: wgpu::ComputePipeline,
+/// The kernel `lbvh_hierarchy`.
+pub(crate) struct LbvhHierarchy {
+    kernel: Kernel<Items>,
 }
 
-impl HierarchyEmission {
-    pub fn new(ctx: &GpuContext) -> Self {
+impl LbvhHierarchy {
+    pub fn new(ctx: &crate::gpu::GpuContext) -> Self {
         Self {
-            pipeline: compute_pipeline(ctx, "lbvh_hierarchy.wgsl", "main"),
+            kernel: Kernel::new(ctx, &LBVH_HIERARCHY),
         }
     }
 
     /// Records the emission over `count` sorted keys (n-1 invocations; nothing for n < 2).
     pub fn record(
         &self,
-        ctx: &GpuContext,
-        pass: &mut wgpu::ComputePass<'_>,
+        pass: &mut Pass<'_>,
         keys: &wgpu::Buffer,
-        count: u32,
+        count: ItemCount<'_>,
         nodes: &wgpu::Buffer,
         parents: &wgpu::Buffer,
     ) {
-        if count < 2 {
+        let capacity = count.capacity();
+        if capacity < 2 {
             return;
         }
-        let (gx, gy) = dispatch_grid(ctx, count - 1, WORKGROUP);
-        let params = uniform_buffer(
-            ctx,
-            "hierarchy params",
-            &HierarchyParams {
-                count,
-                row_pitch: gx * WORKGROUP,
-                _pad: [0; 2],
-            },
+        let ctx = pass.ctx();
+        let grid: Grid = self.kernel.grid(ctx, capacity - 1);
+        pass.dispatch(
+            &self.kernel,
+            grid,
+            &Items::new(capacity, grid),
+            &[keys, nodes, parents, count.limit(ctx)],
         );
-        let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("lbvh_hierarchy"),
-            layout: &self.pipeline.get_bind_group_layout(0),
-            entries: &[
-                bind_entry(0, &params),
-                bind_entry(1, keys),
-                bind_entry(2, nodes),
-                bind_entry(3, parents),
-            ],
-        });
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &bind_group, &[]);
-        pass.dispatch_workgroups(gx, gy, 1);
     }
 }

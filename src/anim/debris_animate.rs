@@ -2,7 +2,7 @@
 //! subdivided 6 times, displaced) stands on a floor among a few crates, then bursts: every
 //! triangle flies off on its own ballistic path, tumbling, and comes to rest on the floor. The
 //! triangles' neighbourhoods change completely, which is the case that defeats refitting a tree
-//! built for the intact mesh. `shaders/debris_animate.wgsl` computes it each frame,
+//! built for the intact mesh. the kernel `debris_animate` computes it each frame,
 //! `debris_triangle` is its CPU twin.
 
 use bytemuck::{Pod, Zeroable};
@@ -10,10 +10,10 @@ use glam::Vec3;
 
 use super::kernel::AnimationKernel;
 use super::{check_triangle_count, AnimateStage, Animation, TimeRange};
-use crate::gpu::{storage_buffer, GpuContext, StageTime};
+use crate::device::Geometry;
+use crate::gpu::{kernel, storage_buffer, Grid, Recorder, StageTime};
 use crate::scene::meshes::{box_between, grid, icosphere};
 use crate::scene::{Camera, Material, Triangle};
-use crate::trace::GpuScene;
 use crate::Result;
 
 /// Where the intact mesh is centred, and its radius.
@@ -27,7 +27,10 @@ const REST_HEIGHT: f32 = 0.02;
 /// The kernel's parameters (`DebrisParams` in `shaders/debris_animate.wgsl`).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
-struct DebrisParams {
+pub struct DebrisParams {
+    count: u32,
+    row_pitch: u32,
+    _pad_a: [u32; 2],
     time: f32,
     start: f32,
     speed: f32,
@@ -38,7 +41,9 @@ struct DebrisParams {
     lift: f32,
     _pad: [u32; 2],
 }
-const _: () = assert!(std::mem::size_of::<DebrisParams>() == 48);
+
+kernel!(pub DEBRIS_ANIMATE: DebrisParams = "debris_animate"::"main", [64, 1, 1],
+    [ReadWrite, Read]);
 
 fn hash(x: u32) -> u32 {
     let mut h = x.wrapping_mul(0x9E37_79B9);
@@ -88,7 +93,7 @@ pub struct Explosion {
     rest: Vec<Triangle>,
     static_triangles: Vec<Triangle>,
     materials: Vec<Material>,
-    kernel: Option<AnimationKernel>,
+    kernel: Option<AnimationKernel<DebrisParams>>,
 }
 
 impl Explosion {
@@ -154,8 +159,11 @@ impl Explosion {
         }
     }
 
-    fn params(time: f32) -> DebrisParams {
+    fn params(&self, time: f32) -> DebrisParams {
         DebrisParams {
+            count: self.rest.len() as u32,
+            row_pitch: 0,
+            _pad_a: [0; 2],
             time,
             start: START,
             speed: 3.5,
@@ -204,7 +212,7 @@ impl Animation for Explosion {
     }
 
     fn evaluate(&self, t: f32, out: &mut Vec<Triangle>) {
-        let params = Self::params(t);
+        let params = self.params(t);
         out.clear();
         out.extend(
             self.rest
@@ -215,21 +223,29 @@ impl Animation for Explosion {
         out.extend_from_slice(&self.static_triangles);
     }
 
-    fn animate(&mut self, ctx: &GpuContext, t: f32, scene: &mut GpuScene) -> Result<StageTime> {
-        check_triangle_count(self, scene)?;
-        let params = Self::params(t);
+    fn animate(
+        &mut self,
+        rec: &mut Recorder<'_>,
+        t: f32,
+        geometry: &Geometry,
+    ) -> Result<Option<StageTime>> {
+        check_triangle_count(self, geometry)?;
+        let params = self.params(t);
         if self.kernel.is_none() {
-            let inputs = vec![storage_buffer(ctx, "debris rest triangles", &self.rest)?];
-            self.kernel = Some(AnimationKernel::new(
-                ctx,
-                "debris_animate.wgsl",
-                self.rest.len() as u32,
-                &params,
-                inputs,
-            ));
+            let inputs = vec![storage_buffer(
+                rec.ctx,
+                "debris rest triangles",
+                &self.rest,
+            )?];
+            self.kernel = Some(AnimationKernel::new(rec.ctx, &DEBRIS_ANIMATE, inputs));
         }
         let kernel = self.kernel.as_ref().expect("created above");
-        kernel.run(ctx, &params, &scene.triangles)
+        let row_pitch = |grid: Grid| DebrisParams {
+            row_pitch: grid.row_pitch,
+            ..params
+        };
+        kernel.record(rec, params.count, row_pitch, &geometry.triangles);
+        Ok(None)
     }
 }
 

@@ -1,6 +1,6 @@
 //! The built-in "bodies" animation: three dozen rigid bodies (icospheres and boxes, 36,864
 //! triangles) orbiting, bouncing and spinning through a static room with pillars (about 4,400
-//! triangles). `shaders/bodies_animate.wgsl` moves the bodies' rest-pose triangles every frame;
+//! triangles). the kernel `bodies_animate` moves the bodies' rest-pose triangles every frame;
 //! `body_triangle` is its CPU twin.
 
 use bytemuck::{Pod, Zeroable};
@@ -8,10 +8,10 @@ use glam::Vec3;
 
 use super::kernel::AnimationKernel;
 use super::{check_triangle_count, AnimateStage, Animation, TimeRange};
-use crate::gpu::{storage_buffer, GpuContext, StageTime};
+use crate::device::Geometry;
+use crate::gpu::{kernel, storage_buffer, Grid, Recorder, StageTime};
 use crate::scene::meshes::{box_between, cube, grid, icosphere};
 use crate::scene::{Camera, Material, Triangle};
-use crate::trace::GpuScene;
 use crate::Result;
 
 /// Number of moving bodies (even ones are icospheres, odd ones boxes).
@@ -22,13 +22,19 @@ const WALL_HEIGHT: f32 = 3.0;
 /// Material of the first body colour (four follow each other).
 const BODY_MATERIAL: u32 = 3;
 
+/// The kernel's parameters (`BodiesParams` in `shaders/bodies_animate.wgsl`).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
-struct BodiesParams {
+pub struct BodiesParams {
+    count: u32,
+    row_pitch: u32,
+    _pad_a: [u32; 2],
     time: f32,
     _pad: [u32; 3],
 }
-const _: () = assert!(std::mem::size_of::<BodiesParams>() == 16);
+
+kernel!(pub BODIES_ANIMATE: BodiesParams = "bodies_animate"::"main", [64, 1, 1],
+    [ReadWrite, Read, Read]);
 
 /// Motion of one body (`BodyMotion` in the kernel).
 #[repr(C)]
@@ -101,7 +107,7 @@ pub struct RigidBodies {
     rest: Vec<RestTriangle>,
     static_triangles: Vec<Triangle>,
     materials: Vec<Material>,
-    kernel: Option<AnimationKernel>,
+    kernel: Option<AnimationKernel<BodiesParams>>,
 }
 
 impl RigidBodies {
@@ -214,8 +220,14 @@ impl RigidBodies {
         }
     }
 
-    fn params(time: f32) -> BodiesParams {
-        BodiesParams { time, _pad: [0; 3] }
+    fn params(&self, time: f32) -> BodiesParams {
+        BodiesParams {
+            count: self.rest.len() as u32,
+            row_pitch: 0,
+            _pad_a: [0; 2],
+            time,
+            _pad: [0; 3],
+        }
     }
 }
 
@@ -259,24 +271,28 @@ impl Animation for RigidBodies {
         out.extend_from_slice(&self.static_triangles);
     }
 
-    fn animate(&mut self, ctx: &GpuContext, t: f32, scene: &mut GpuScene) -> Result<StageTime> {
-        check_triangle_count(self, scene)?;
-        let params = Self::params(t);
+    fn animate(
+        &mut self,
+        rec: &mut Recorder<'_>,
+        t: f32,
+        geometry: &Geometry,
+    ) -> Result<Option<StageTime>> {
+        check_triangle_count(self, geometry)?;
+        let params = self.params(t);
         if self.kernel.is_none() {
             let inputs = vec![
-                storage_buffer(ctx, "body motions", &self.bodies)?,
-                storage_buffer(ctx, "body rest triangles", &self.rest)?,
+                storage_buffer(rec.ctx, "body motions", &self.bodies)?,
+                storage_buffer(rec.ctx, "body rest triangles", &self.rest)?,
             ];
-            self.kernel = Some(AnimationKernel::new(
-                ctx,
-                "bodies_animate.wgsl",
-                self.rest.len() as u32,
-                &params,
-                inputs,
-            ));
+            self.kernel = Some(AnimationKernel::new(rec.ctx, &BODIES_ANIMATE, inputs));
         }
         let kernel = self.kernel.as_ref().expect("created above");
-        kernel.run(ctx, &params, &scene.triangles)
+        let row_pitch = |grid: Grid| BodiesParams {
+            row_pitch: grid.row_pitch,
+            ..params
+        };
+        kernel.record(rec, params.count, row_pitch, &geometry.triangles);
+        Ok(None)
     }
 }
 

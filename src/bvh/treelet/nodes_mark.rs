@@ -1,0 +1,23 @@
+//! Leaf collapse step 1 (kernel `nodes_mark`; Karras & Aila 2013, §3): which nodes of the
+//! optimized working tree survive, and which become output leaves.
+
+use bytemuck::{Pod, Zeroable};
+
+use crate::gpu::kernel;
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+pub struct MarkParams {
+    pub leaf_count: u32,
+    pub row_pitch: u32,
+    pub max_leaf_size: u32,
+    pub ct: f32,
+    /// Always 0: keeps the kernel's area products unfused (see `unfused` in the shader).
+    pub zero: u32,
+    /// 1 when the primitives are pre-split references mapped through `ref_tris`.
+    pub has_refs: u32,
+    pub _pad: [u32; 2],
+}
+
+kernel!(pub NODES_MARK: MarkParams = "nodes_mark"::"main", [64, 1, 1],
+    [Read, Read, Read, Read, ReadWrite, ReadWrite, ReadWrite, Read, Read, Read]);

@@ -1,0 +1,239 @@
+//! How a frame's tree is produced — the one dispatch point over every way: a GPU builder
+//! rebuilds it (LBVH, TRBVH, TRBVH with pre-splitting), a CPU reference builder builds it and
+//! uploads it, or a refit keeps the topology of the tree built at the first frame and recomputes
+//! its boxes (`nodes_refit`). `UpdateMode` names the choice, `TreeUpdater` carries it out.
+
+use std::time::Instant;
+
+use super::lbvh::{LbvhBuilder, LBVH_PASSES};
+use super::nodes_refit::{derive_refit_links, NodesRefit};
+use super::treelet::{TrbvhBuilder, TreeletSettings};
+use super::{build_sbvh, build_sweep_sah, Builder, SahParams};
+use crate::device::{Geometry, Tree};
+use crate::gpu::{GpuContext, Recorder, StageTime};
+use crate::scene::Triangle;
+use crate::{Error, Result};
+
+/// The per-frame tree update of an animated scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum UpdateMode {
+    /// Build a new tree every frame with this builder.
+    Rebuild(Builder),
+    /// Build a tree with this (GPU) builder at the first frame, then refit its boxes.
+    Refit(Builder),
+}
+
+impl UpdateMode {
+    /// The refit modes offered by name: over the LBVH and over the TRBVH tree of the first frame.
+    pub const REFITS: &[UpdateMode] = &[
+        UpdateMode::Refit(Builder::Lbvh),
+        UpdateMode::Refit(Builder::Trbvh(TreeletSettings::BALANCED)),
+    ];
+
+    /// Every mode by name: each builder's rebuild, then the refits.
+    pub fn all() -> Vec<UpdateMode> {
+        Builder::ALL
+            .iter()
+            .map(|&b| UpdateMode::Rebuild(b))
+            .chain(Self::REFITS.iter().copied())
+            .collect()
+    }
+
+    /// `lbvh`, `trbvh`, … for rebuilds; `refit` (LBVH topology) and `refit-trbvh` for refits.
+    pub fn name(self) -> &'static str {
+        match self {
+            UpdateMode::Rebuild(b) => b.name(),
+            UpdateMode::Refit(Builder::Trbvh(_)) => "refit-trbvh",
+            UpdateMode::Refit(_) => "refit",
+        }
+    }
+
+    /// A longer label for reports: the treelet settings of trbvh, the topology of refits.
+    pub fn label(self) -> String {
+        match self {
+            UpdateMode::Rebuild(b) => b.label(),
+            UpdateMode::Refit(b) => format!("refit ({} topology of frame 0)", b.label()),
+        }
+    }
+
+    /// A mode by name (see `name`).
+    pub fn parse(name: &str) -> Result<Self> {
+        let all = Self::all();
+        all.iter()
+            .copied()
+            .find(|m| m.name() == name)
+            .ok_or_else(|| {
+                let known: Vec<_> = all.iter().map(|m| m.name()).collect();
+                Error::InvalidArgument(format!(
+                    "unknown builder '{name}' (known: {})",
+                    known.join(", ")
+                ))
+            })
+    }
+
+    /// Whether the update runs on the GPU (refits always do; rebuilds with GPU builders).
+    pub fn is_gpu(self) -> bool {
+        match self {
+            UpdateMode::Rebuild(b) => b.is_gpu(),
+            UpdateMode::Refit(_) => true,
+        }
+    }
+
+    pub fn is_refit(self) -> bool {
+        matches!(self, UpdateMode::Refit(_))
+    }
+
+    /// The builder that builds (rebuild) or built the topology (refit).
+    pub fn builder(self) -> Builder {
+        match self {
+            UpdateMode::Rebuild(b) | UpdateMode::Refit(b) => b,
+        }
+    }
+}
+
+/// The builder behind a mode.
+enum Producer {
+    Lbvh(Box<LbvhBuilder>),
+    Trbvh(Box<TrbvhBuilder>),
+    Cpu(Builder),
+}
+
+/// Produces a tree per frame in one of the modes (see the module documentation).
+pub struct TreeUpdater {
+    mode: UpdateMode,
+    producer: Producer,
+    /// Refit modes: the kernel; the topology's links live with the tree.
+    refit: Option<NodesRefit>,
+    /// Refit modes: build a new topology at the next update.
+    rebuild_topology: bool,
+    sah: SahParams,
+}
+
+impl TreeUpdater {
+    /// Kernels for `mode` (refits need a GPU builder for their topology).
+    pub fn new(ctx: &GpuContext, mode: UpdateMode, sah: &SahParams) -> Result<Self> {
+        let producer = match mode.builder() {
+            Builder::Lbvh => Producer::Lbvh(Box::new(LbvhBuilder::new(ctx))),
+            Builder::Trbvh(settings) | Builder::TrbvhSplit(settings) => {
+                Producer::Trbvh(Box::new(TrbvhBuilder::new(ctx, settings, *sah)?))
+            }
+            cpu if mode.is_refit() => {
+                return Err(Error::InvalidArgument(format!(
+                    "refits need a GPU builder for their topology, not {}",
+                    cpu.name()
+                )))
+            }
+            cpu => Producer::Cpu(cpu),
+        };
+        Ok(Self {
+            mode,
+            producer,
+            refit: mode.is_refit().then(|| NodesRefit::new(ctx)),
+            rebuild_topology: true,
+            sah: *sah,
+        })
+    }
+
+    pub fn mode(&self) -> UpdateMode {
+        self.mode
+    }
+
+    /// SAH parameters of the next builds (treelet builders' cost model and max leaf size; CPU
+    /// builders' too).
+    pub fn set_sah_params(&mut self, sah: SahParams) {
+        self.sah = sah;
+        if let Producer::Trbvh(b) = &mut self.producer {
+            b.sah = sah;
+        }
+    }
+
+    /// Timestamped passes one update records at most (the size of a timer for it).
+    pub fn pass_count(&self) -> u32 {
+        match &self.producer {
+            Producer::Lbvh(_) => LBVH_PASSES,
+            Producer::Trbvh(b) => b.pass_count(),
+            Producer::Cpu(_) => 0,
+        }
+        .max(1)
+    }
+
+    /// Refits: the next update builds a new topology (after the animation looped, or a setting
+    /// changed).
+    pub fn reset(&mut self) {
+        self.rebuild_topology = true;
+    }
+
+    /// Updates `tree` to `geometry` (whose triangles, on the CPU, are `triangles`: CPU builders
+    /// read them). GPU builders and refits record their passes into `rec`; a CPU builder builds
+    /// the tree now and replaces `tree` by its upload, and returns its CPU time. A refit of a tree
+    /// without refit links builds the topology first and derives them (flushing `rec` and reading
+    /// the tree back: once per topology, not per frame).
+    pub fn record(
+        &mut self,
+        rec: &mut Recorder<'_>,
+        geometry: &Geometry,
+        triangles: &[Triangle],
+        tree: &mut Tree,
+    ) -> Result<Option<StageTime>> {
+        if let Some(refit) = &self.refit {
+            if !self.rebuild_topology {
+                if let Some(links) = &tree.refit_links {
+                    refit.record(rec, &geometry.triangles, tree, links);
+                    return Ok(None);
+                }
+            }
+        }
+        let cpu_time = match &mut self.producer {
+            Producer::Lbvh(b) => {
+                b.record(rec, geometry, tree)?;
+                None
+            }
+            Producer::Trbvh(b) => {
+                b.record(rec, geometry, tree)?;
+                None
+            }
+            Producer::Cpu(builder) => {
+                let start = Instant::now();
+                let bvh = match builder {
+                    Builder::Sbvh => build_sbvh(triangles, &self.sah),
+                    _ => build_sweep_sah(triangles, &self.sah),
+                };
+                let ms = start.elapsed().as_secs_f64() * 1e3;
+                *tree = Tree::upload(rec.ctx, &bvh)?;
+                Some(StageTime {
+                    label: format!("cpu {}", builder.name()),
+                    ms: Some(ms),
+                })
+            }
+        };
+        if self.refit.is_some() {
+            rec.flush();
+            tree.refit_links = Some(derive_refit_links(rec.ctx, tree)?);
+            self.rebuild_topology = false;
+        }
+        Ok(cpu_time)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn modes_parse_by_name() {
+        assert_eq!(
+            UpdateMode::parse("lbvh").unwrap(),
+            UpdateMode::Rebuild(Builder::Lbvh)
+        );
+        assert_eq!(
+            UpdateMode::parse("refit").unwrap(),
+            UpdateMode::Refit(Builder::Lbvh)
+        );
+        assert!(UpdateMode::parse("refit-trbvh").unwrap().is_refit());
+        let e = UpdateMode::parse("magic").unwrap_err().to_string();
+        assert!(e.contains("unknown builder") && e.contains("refit"), "{e}");
+        for mode in UpdateMode::all() {
+            assert_eq!(UpdateMode::parse(mode.name()).unwrap().name(), mode.name());
+        }
+    }
+}

@@ -1,0 +1,66 @@
+//! Numbers the kernels and their Rust twins share, defined once: Rust uses these constants, and
+//! kernels get them from the generated include `constants.wgsl` (`#include "constants.wgsl"`).
+
+/// Set in a leaf node's `right_or_count` (`BvhNode`).
+pub const LEAF_FLAG: u32 = 0x8000_0000;
+/// The triangle id of a miss (`Hit::MISS`).
+pub const MISS: u32 = u32::MAX;
+/// Cells per axis of the Morton grid (21 key bits per axis) the LBVH keys and the pre-splitting
+/// planes share.
+pub const MORTON_GRID: u32 = 1 << 21;
+/// Splits per triangle at most in pre-splitting (pieces ≤ `MAX_SPLITS + 1`).
+pub const MAX_SPLITS: u32 = 31;
+/// Largest treelet (leaves): 2^8 subsets fit the kernel's workgroup memory.
+pub const MAX_TREELET_SIZE: u32 = 8;
+/// Largest leaf the GPU collapse may create (its gather stack holds a leaf's subtree).
+pub const MAX_GPU_LEAF_SIZE: u32 = 32;
+/// Widening of a box's exit distance in the traversal's box test (Ize 2013): rounding never culls
+/// a box that the ray touches (see `box_entry` in bvh_traverse.wgsl).
+pub const BOX_EXIT_SLACK: f32 = 1.000_001_9;
+/// Bits per radix-sort digit.
+pub const RADIX_BITS: u32 = 4;
+/// Keys per workgroup (tile) of the radix sort's histogram and scatter kernels.
+pub const SORT_TILE: u32 = 8192;
+/// Elements per workgroup of the prefix scan.
+pub const SCAN_BLOCK: u32 = 1024;
+
+/// The text of the include `constants.wgsl`.
+pub fn wgsl() -> String {
+    let f32_const = |name: &str, value: f32| format!("const {name}: f32 = {value:?};\n");
+    let u32_const = |name: &str, value: u32| format!("const {name}: u32 = {value}u;\n");
+    [
+        u32_const("LEAF_FLAG", LEAF_FLAG),
+        u32_const("MISS", MISS),
+        f32_const("MORTON_GRID", MORTON_GRID as f32),
+        f32_const("MORTON_GRID_MAX", (MORTON_GRID - 1) as f32),
+        u32_const("MAX_SPLITS", MAX_SPLITS),
+        u32_const("MAX_TREELET", MAX_TREELET_SIZE),
+        u32_const("MAX_GPU_LEAF_SIZE", MAX_GPU_LEAF_SIZE),
+        f32_const("BOX_EXIT_SLACK", BOX_EXIT_SLACK),
+        u32_const("RADIX_BITS", RADIX_BITS),
+        u32_const("SORT_TILE", SORT_TILE),
+        u32_const("SCAN_BLOCK", SCAN_BLOCK),
+    ]
+    .concat()
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn floats_print_exactly() {
+        // `{:?}` prints the shortest text that parses back to the same f32.
+        let text = super::wgsl();
+        assert!(
+            text.contains("const BOX_EXIT_SLACK: f32 = 1.0000019;"),
+            "{text}"
+        );
+        assert!(
+            text.contains("const MORTON_GRID: f32 = 2097152.0;"),
+            "{text}"
+        );
+        assert!(
+            text.contains("const LEAF_FLAG: u32 = 2147483648u;"),
+            "{text}"
+        );
+    }
+}

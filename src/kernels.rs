@@ -1,0 +1,36 @@
+//! Every compute kernel's declaration in one table, for the checks that cover them all
+//! (`tests/shaders.rs`: each declaration against its WGSL with naga, and every shader file
+//! declared).
+
+use crate::gpu::KernelInfo;
+use crate::{anim, bvh, sort, trace};
+
+/// Each kernel's declaration (see `gpu::KernelDecl`).
+pub const ALL: &[&KernelInfo] = &[
+    &bvh::lbvh::TRIANGLES_BOUNDS.info,
+    &bvh::lbvh::CENTROIDS_FROM_PRIMS.info,
+    &bvh::lbvh::CENTROIDS_FROM_BOXES.info,
+    &bvh::lbvh::MORTON_COMPUTE.info,
+    &bvh::lbvh::LBVH_HIERARCHY.info,
+    &bvh::lbvh::BOUNDS_REFIT.info,
+    &sort::KEYS_HISTOGRAM.info,
+    &sort::KEYS_SCATTER.info,
+    &sort::COUNTS_SCAN.info,
+    &sort::COUNTS_ADD.info,
+    &bvh::treelet::TREELET_OPTIMIZE.info,
+    &bvh::treelet::NODES_MARK.info,
+    &bvh::treelet::NODES_COMPACT.info,
+    &bvh::presplit::TRIANGLES_PRIORITY.info,
+    &bvh::presplit::SPLITS_INIT_SEARCH.info,
+    &bvh::presplit::SPLITS_COUNT.info,
+    &bvh::presplit::SPLITS_BISECT_STEP.info,
+    &bvh::presplit::SPLITS_WRITE_COUNTS.info,
+    &bvh::presplit::TRIANGLES_SPLIT.info,
+    &bvh::NODES_REFIT.info,
+    &trace::PATHS_TRACE.info,
+    &trace::IMAGE_TONEMAP.info,
+    &trace::RAYS_INTERSECT.info,
+    &anim::CLOTH_ANIMATE.info,
+    &anim::BODIES_ANIMATE.info,
+    &anim::DEBRIS_ANIMATE.info,
+];

@@ -1,0 +1,7 @@
+//! Prefix scan add-back (kernel `counts_add`): every element of block b gets the scanned total of
+//! the blocks before it, which makes the blockwise scans of `counts_scan` global.
+
+use super::prefix_scan::ScanParams;
+use crate::gpu::kernel;
+
+kernel!(pub COUNTS_ADD: ScanParams = "counts_add"::"main", [256, 1, 1], [ReadWrite, Read]);

@@ -1,0 +1,9 @@
+//! Radix sort step 3 (kernel `keys_scatter`): stable ranking within the tile by per-invocation
+//! counting (Zagha & Blelloch 1991, one "processor" per invocation) and the scatter of each
+//! (key, value) pair to `offset[digit, tile] + rank`.
+
+use super::radix_sort::SortParams;
+use crate::gpu::kernel;
+
+kernel!(pub KEYS_SCATTER: SortParams = "keys_scatter"::"main", [256, 1, 1],
+    [Read, Read, Read, ReadWrite, ReadWrite, Read]);

@@ -1,0 +1,31 @@
+//! The diffuse path-tracing kernel (`paths_trace`): its parameters and declaration. One
+//! invocation per pixel traces `samples` paths through the BVH (closest hit per bounce, any hit
+//! per point light) and accumulates their radiance; every ray is counted.
+
+use bytemuck::{Pod, Zeroable};
+
+use crate::gpu::kernel;
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+pub struct TraceParams {
+    pub eye: [f32; 3],
+    pub seed: u32,
+    pub right: [f32; 3],
+    pub width: u32,
+    pub up: [f32; 3],
+    pub height: u32,
+    pub forward: [f32; 3],
+    pub max_depth: u32,
+    pub sky: [f32; 3],
+    pub samples: u32,
+    pub light_count: u32,
+    /// Always 0: keeps the triangle test's products unfused (`opaque` in ray_triangle.wgsl).
+    pub opaque_zero: u32,
+    /// Which pair of `counters` this dispatch adds its rays and stack overflows to.
+    pub counter_slot: u32,
+    pub _pad: u32,
+}
+
+kernel!(pub PATHS_TRACE: TraceParams = "paths_trace"::"main", [8, 8, 1],
+    [Read, Read, Read, Read, ReadWrite, ReadWrite, Read]);
