@@ -10,6 +10,7 @@ pub mod presplit;
 mod sah;
 mod sbvh;
 mod sweep;
+mod topdown;
 mod traverse;
 pub mod treelet;
 mod update;

@@ -4,8 +4,9 @@
 //! A greedy top-down SAH build over *references* (a triangle id and a box that may cover only a
 //! part of the triangle). Each node considers
 //! - **object splits**: a full sweep (every position, not binned) over the references sorted by
-//!   box centroid along each axis, ties broken by triangle id, exactly as the sweep builder
-//!   (`sweep.rs`) does, so where no spatial split happens both builders produce the same tree;
+//!   box centroid along each axis, ties broken by triangle id: the sweep builder's (`sweep.rs`)
+//!   sweep, sort key, leaf rule and node layout, all from the shared top-down core
+//!   (`topdown.rs`), so where no spatial split happens both builders produce the same tree;
 //! - **spatial splits**, only where the best object split's children overlap by more than
 //!   α = 1e-5 of the root's surface area (the paper's λ > α test; always where no object split
 //!   exists, e.g. all centroids equal): 32 equal bins per axis across the node box. A reference
@@ -16,14 +17,14 @@
 //! The cheaper candidate by SAH (`Ci + Ct·(A(L)·N(L) + A(R)·N(R)) / A(node)`, [`SahParams`]:
 //! Ci = 1.2, Ct = 1 by default) wins; a binned spatial estimate that beats the object split is
 //! performed exactly and kept only if its exact cost still wins. Performing a spatial split clips
-//! each straddling reference exactly: Sutherland–Hodgman polygon clipping of the triangle against
-//! the reference box and the half-space on either side of the plane, in f64; a side the triangle
-//! does not reach strictly past the plane gets nothing. **Reference unsplitting** (paper §4.4) is
-//! done: straddlers, in triangle id order, go wholly to one side when that is cheaper than
-//! duplicating them. Leaf termination is the sweep builder's: a leaf when `N ≤ max_leaf_size` and
-//! `Ct·N` is no more than the best split, always a split when `N > max_leaf_size` (a count split
-//! in the middle where no SAH split exists: degenerate boxes, all centroids equal and no spatial
-//! split).
+//! each straddling reference exactly: Sutherland–Hodgman polygon clipping (`geometry::Polygon`)
+//! of the triangle against the reference box and the half-space on either side of the plane, in
+//! f64; a side the triangle does not reach strictly past the plane gets nothing. **Reference
+//! unsplitting** (paper §4.4) is done: straddlers, in triangle id order, go wholly to one side
+//! when that is cheaper than duplicating them. Leaf termination is the core's: a leaf when
+//! `N ≤ max_leaf_size` and `Ct·N` is no more than the best split, always a split when
+//! `N > max_leaf_size` (a count split in the middle, in triangle id order, where no SAH split
+//! exists: degenerate boxes, all centroids equal and no spatial split).
 //!
 //! Properties: each node holds at most one reference per triangle (a reference goes left, right
 //! or both), so no leaf references a triangle twice, while a triangle may be referenced by several
@@ -37,14 +38,15 @@
 //! Implementation: each node's references are kept in triangle id order, so a (centroid, local
 //! index) key sorts exactly like the sweep builder; each node sorts its keys per axis
 //! (O(n log² n) in total). Measured: the 1.1M-triangle `field-1m` in about 10 s, a pathological
-//! 2M-triangle soup of large overlapping triangles in about 2 minutes, under 0.6 GB. An explicit
-//! stack replaces recursion; every split leaves both children non-empty and either shrinks the
-//! reference count or spends budget, so the build terminates.
+//! 2M-triangle soup of large overlapping triangles in about 2 minutes, under 0.6 GB. Every split
+//! leaves both children non-empty and either shrinks the reference count or spends budget, so the
+//! build terminates.
 
 use glam::{DVec3, Vec3};
 
-use super::{Bvh, BvhNode, SahParams, LEAF_FLAG};
-use crate::geometry::Aabb;
+use super::topdown::{self, centroid_key, NodeSplitter, ObjectSplit, ObjectSweep, MAX_REFERENCES};
+use super::{Bvh, SahParams};
+use crate::geometry::{Aabb, Crossing, HalfSpace, Polygon};
 use crate::scene::Triangle;
 
 /// Bins per axis for spatial split candidates.
@@ -66,101 +68,36 @@ struct Reference {
     tri: u32,
 }
 
-/// A convex polygon in f64: a triangle clipped by axis-aligned planes.
-#[derive(Clone, Copy)]
-struct Polygon {
-    vertices: [DVec3; MAX_POLYGON_VERTICES],
-    len: usize,
-    /// Set when clipping ran out of vertex slots (only conceivable for numerically degenerate
-    /// input); the polygon's box is then replaced by the conservative clip box.
-    overflowed: bool,
+/// A triangle clipped by axis-aligned planes, in f64. Overflow (only conceivable for numerically
+/// degenerate input) makes its box the conservative clip box.
+type ClippedTriangle = Polygon<DVec3, MAX_POLYGON_VERTICES>;
+
+/// (min, max) of coordinate `axis` of `polygon`'s vertices; (∞, −∞) when empty.
+fn coordinate_range(polygon: &ClippedTriangle, axis: usize) -> (f64, f64) {
+    polygon
+        .vertices()
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(v[axis]), hi.max(v[axis]))
+        })
 }
 
-impl Polygon {
-    const EMPTY: Polygon = Polygon {
-        vertices: [DVec3::ZERO; MAX_POLYGON_VERTICES],
-        len: 0,
-        overflowed: false,
-    };
-
-    fn from_triangle(triangle: &Triangle) -> Self {
-        let mut polygon = Self::EMPTY;
-        for v in triangle.vertices() {
-            polygon.push(v.as_dvec3());
-        }
-        polygon
+/// The box of `polygon` rounded outward to f32 (after widening by `margin`) and intersected with
+/// `limit`; `None` when the polygon or the intersection is empty. An overflowed polygon gives
+/// `limit` itself (conservative).
+fn bounds_within(polygon: &ClippedTriangle, limit: &Aabb, margin: f64) -> Option<Aabb> {
+    if polygon.overflowed() {
+        return Some(*limit);
     }
-
-    fn push(&mut self, v: DVec3) {
-        if self.len == MAX_POLYGON_VERTICES {
-            self.overflowed = true;
-        } else {
-            self.vertices[self.len] = v;
-            self.len += 1;
-        }
-    }
-
-    fn vertices(&self) -> &[DVec3] {
-        &self.vertices[..self.len]
-    }
-
-    /// The part with coordinate `axis` ≤ `pos` (`keep_below`) or ≥ `pos` (Sutherland–Hodgman).
-    /// Crossing points lie exactly on the plane and inside their edge's box.
-    fn clip(&self, axis: usize, pos: f64, keep_below: bool) -> Self {
-        let mut out = Self::EMPTY;
-        out.overflowed = self.overflowed;
-        let inside = |v: DVec3| {
-            if keep_below {
-                v[axis] <= pos
-            } else {
-                v[axis] >= pos
-            }
-        };
-        let n = self.len;
-        for i in 0..n {
-            let a = self.vertices[i];
-            let b = self.vertices[(i + 1) % n];
-            let a_inside = inside(a);
-            if a_inside {
-                out.push(a);
-            }
-            if a_inside != inside(b) {
-                // One end is strictly beyond the plane, so the denominator is not zero.
-                let t = (pos - a[axis]) / (b[axis] - a[axis]);
-                let mut p = (a + (b - a) * t).clamp(a.min(b), a.max(b));
-                p[axis] = pos;
-                out.push(p);
-            }
-        }
-        out
-    }
-
-    /// (min, max) of coordinate `axis`; (∞, −∞) when empty.
-    fn range(&self, axis: usize) -> (f64, f64) {
-        self.vertices()
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
-                (lo.min(v[axis]), hi.max(v[axis]))
-            })
-    }
-
-    /// The polygon's box rounded outward to f32 (after widening by `margin`) and intersected with
-    /// `limit`; `None` when the polygon or the intersection is empty. An overflowed polygon gives
-    /// `limit` itself (conservative).
-    fn bounds_within(&self, limit: &Aabb, margin: f64) -> Option<Aabb> {
-        if self.overflowed {
-            return Some(*limit);
-        }
-        let (first, rest) = self.vertices().split_first()?;
-        let (lo, hi) = rest
-            .iter()
-            .fold((*first, *first), |(lo, hi), &v| (lo.min(v), hi.max(v)));
-        let bounds = Aabb::new(
-            round_down(lo - DVec3::splat(margin)).max(limit.min),
-            round_up(hi + DVec3::splat(margin)).min(limit.max),
-        );
-        (!bounds.is_empty()).then_some(bounds)
-    }
+    let (first, rest) = polygon.vertices().split_first()?;
+    let (lo, hi) = rest
+        .iter()
+        .fold((*first, *first), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+    let bounds = Aabb::new(
+        round_down(lo - DVec3::splat(margin)).max(limit.min),
+        round_up(hi + DVec3::splat(margin)).min(limit.max),
+    );
+    (!bounds.is_empty()).then_some(bounds)
 }
 
 /// The largest f32 vector ≤ `v` per component.
@@ -188,15 +125,17 @@ fn clip_margin(triangle: &Triangle) -> f64 {
 }
 
 /// `triangle` clipped to `bounds` (only against the planes the triangle crosses).
-fn clip_to_box(triangle: &Triangle, bounds: &Aabb) -> Polygon {
+fn clip_to_box(triangle: &Triangle, bounds: &Aabb) -> ClippedTriangle {
     let tri_bounds = triangle.bounds();
-    let mut polygon = Polygon::from_triangle(triangle);
+    let mut polygon = ClippedTriangle::triangle(triangle.vertices().map(Vec3::as_dvec3));
     for axis in 0..3 {
         if tri_bounds.min[axis] < bounds.min[axis] {
-            polygon = polygon.clip(axis, f64::from(bounds.min[axis]), false);
+            let plane = f64::from(bounds.min[axis]);
+            polygon = polygon.clip(axis, plane, HalfSpace::Above, Crossing::WithinEdgeBox);
         }
         if tri_bounds.max[axis] > bounds.max[axis] {
-            polygon = polygon.clip(axis, f64::from(bounds.max[axis]), true);
+            let plane = f64::from(bounds.max[axis]);
+            polygon = polygon.clip(axis, plane, HalfSpace::Below, Crossing::WithinEdgeBox);
         }
     }
     polygon
@@ -276,31 +215,23 @@ fn split_reference(
     let polygon = clip_to_box(triangle, &r.bounds);
     let margin = clip_margin(triangle);
     let p = f64::from(pos);
-    let below = polygon.clip(axis, p, true);
-    let above = polygon.clip(axis, p, false);
-    let left = if below.overflowed || below.range(axis).0 < p {
-        below.bounds_within(&slab(&r.bounds, axis, f32::NEG_INFINITY, pos), margin)
+    let below = polygon.clip(axis, p, HalfSpace::Below, Crossing::WithinEdgeBox);
+    let above = polygon.clip(axis, p, HalfSpace::Above, Crossing::WithinEdgeBox);
+    let left = if below.overflowed() || coordinate_range(&below, axis).0 < p {
+        bounds_within(
+            &below,
+            &slab(&r.bounds, axis, f32::NEG_INFINITY, pos),
+            margin,
+        )
     } else {
         None
     };
-    let right = if above.overflowed || above.range(axis).1 > p {
-        above.bounds_within(&slab(&r.bounds, axis, pos, f32::INFINITY), margin)
+    let right = if above.overflowed() || coordinate_range(&above, axis).1 > p {
+        bounds_within(&above, &slab(&r.bounds, axis, pos, f32::INFINITY), margin)
     } else {
         None
     };
     (left, right)
-}
-
-/// A key whose unsigned order is the total order of `f32` values, with the id as tie-break (the
-/// sweep builder's key).
-fn sort_key(value: f32, id: u32) -> u64 {
-    let bits = value.to_bits();
-    let ordered = if bits & 0x8000_0000 != 0 {
-        !bits
-    } else {
-        bits | 0x8000_0000
-    };
-    (u64::from(ordered) << 32) | u64::from(id)
 }
 
 fn union_all(refs: &[Reference]) -> Aabb {
@@ -309,15 +240,6 @@ fn union_all(refs: &[Reference]) -> Aabb {
 
 fn intersection(a: &Aabb, b: &Aabb) -> Aabb {
     Aabb::new(a.min.max(b.min), a.max.min(b.max))
-}
-
-/// The best object split: the references of the first `left_count` keys of `best_keys` go left.
-struct ObjectSplit {
-    left_count: usize,
-    left_bounds: Aabb,
-    right_bounds: Aabb,
-    /// `A(L)·N(L) + A(R)·N(R)`.
-    sum: f32,
 }
 
 /// A best spatial split candidate from the bins.
@@ -365,39 +287,32 @@ struct Bin {
     exits: u32,
 }
 
-/// A node still to be emitted: its references and their bounds, its share of the reference
-/// budget, and where to write its index in the parent (`(parent, is_right)`; `None` for the root).
-struct Task {
+/// A node's references, in triangle id order, and its share of the reference budget.
+struct NodeReferences {
     refs: Vec<Reference>,
-    bounds: Aabb,
     budget: usize,
-    parent: Option<(usize, bool)>,
 }
 
-struct Builder<'a> {
+/// Object and spatial splits with reference unsplitting, within the reference budget.
+struct SbvhSplitter<'a> {
     triangles: &'a [Triangle],
-    params: SahParams,
-    max_leaf_size: usize,
     root_area: f32,
+    sweep: ObjectSweep,
     /// Scratch: sort keys (centroid, local index) along the axis being swept.
     keys: Vec<u64>,
     /// Scratch: the keys of the best object split so far.
     best_keys: Vec<u64>,
     /// Scratch: the references' boxes in `keys` order.
     sorted_boxes: Vec<Aabb>,
-    /// Scratch: suffix areas of the current sweep.
-    suffix_area: Vec<f32>,
     /// Scratch: which references (by local index) the object split sends left.
     goes_left: Vec<bool>,
 }
 
-impl Builder<'_> {
-    /// The best full-sweep object split over the axes with a non-zero centroid extent; its order
+impl SbvhSplitter<'_> {
+    /// The best full-sweep object split over the axes along which the centroids spread; its order
     /// of the references is left in `best_keys`.
-    fn find_object_split(&mut self, refs: &[Reference]) -> Option<ObjectSplit> {
-        let n = refs.len();
-        let mut best: Option<ObjectSplit> = None;
-        self.suffix_area.resize(n, 0.0);
+    fn find_object_split(&mut self, refs: &[Reference]) -> Option<(ObjectSplit, f32)> {
+        let mut search = self.sweep.search();
         for axis in 0..3 {
             let (lo, hi) = refs
                 .iter()
@@ -414,47 +329,27 @@ impl Builder<'_> {
             self.keys.extend(
                 refs.iter()
                     .enumerate()
-                    .map(|(j, r)| sort_key(r.bounds.centroid()[axis], j as u32)),
+                    .map(|(j, r)| centroid_key(r.bounds.centroid()[axis], j as u32)),
             );
             self.keys.sort_unstable();
             self.sorted_boxes.clear();
             self.sorted_boxes
                 .extend(self.keys.iter().map(|&k| refs[k as u32 as usize].bounds));
-            let boxes = &self.sorted_boxes;
-            let mut acc = Aabb::EMPTY;
-            for i in (1..n).rev() {
-                acc = acc.union(boxes[i]);
-                self.suffix_area[i] = acc.surface_area();
-            }
-            let mut improved = false;
-            let mut left = Aabb::EMPTY;
-            for i in 1..n {
-                left = left.union(boxes[i - 1]);
-                let sum = left.surface_area() * i as f32 + self.suffix_area[i] * (n - i) as f32;
-                if sum < best.as_ref().map_or(f32::INFINITY, |b| b.sum) {
-                    best = Some(ObjectSplit {
-                        left_count: i,
-                        left_bounds: left,
-                        right_bounds: Aabb::EMPTY,
-                        sum,
-                    });
-                    improved = true;
-                }
-            }
-            if improved {
-                let split = best.as_mut().expect("improved");
-                split.right_bounds = boxes[split.left_count..]
-                    .iter()
-                    .fold(Aabb::EMPTY, |b, &x| b.union(x));
+            if search.sweep_axis(axis, &self.sorted_boxes) {
                 std::mem::swap(&mut self.keys, &mut self.best_keys);
             }
         }
-        best
+        let best_keys = &self.best_keys;
+        search.finish(|_, left_count| {
+            best_keys[left_count..]
+                .iter()
+                .map(|&k| refs[k as u32 as usize].bounds)
+        })
     }
 
     /// Applies the object split found last: its left set (the first `left_count` of
     /// `best_keys`) and the rest, both kept in triangle id order.
-    fn object_partition(&mut self, refs: &[Reference], split: &ObjectSplit) -> Partition {
+    fn object_partition(&mut self, refs: &[Reference], split: &ObjectSplit, sum: f32) -> Partition {
         self.goes_left.clear();
         self.goes_left.resize(refs.len(), false);
         for &k in &self.best_keys[..split.left_count] {
@@ -474,7 +369,7 @@ impl Builder<'_> {
             left_bounds: split.left_bounds,
             right,
             right_bounds: split.right_bounds,
-            sum: split.sum,
+            sum,
             duplicates: 0,
         }
     }
@@ -709,51 +604,81 @@ impl Builder<'_> {
         }
         Some(Partition::new(left, right, refs.len()))
     }
+}
 
-    /// Count split in the middle (degenerate nodes).
-    fn median_partition(refs: &[Reference]) -> Partition {
+impl NodeSplitter for SbvhSplitter<'_> {
+    type Node = NodeReferences;
+    type Split = Partition;
+
+    fn count(&self, node: &NodeReferences) -> usize {
+        node.refs.len()
+    }
+
+    /// The cheaper of the best object split and, where its children overlap (or it does not
+    /// exist), the best spatial split.
+    fn best_split(&mut self, node: &NodeReferences, bounds: &Aabb) -> Option<(Partition, f32)> {
+        let refs = &node.refs;
+        let object = self.find_object_split(refs);
+        let object_sum = object.as_ref().map_or(f32::INFINITY, |o| o.1);
+        let try_spatial = self.root_area > 0.0
+            && self.root_area.is_finite()
+            && object.as_ref().is_none_or(|(o, _)| {
+                let overlap = intersection(&o.left_bounds, &o.right_bounds);
+                overlap.surface_area() / self.root_area > OVERLAP_THRESHOLD
+            });
+        let spatial = if try_spatial {
+            self.find_spatial_split(refs, bounds, node.budget)
+                .filter(|c| c.sum < object_sum)
+                .and_then(|c| self.spatial_partition(refs, c.axis, c.position, node.budget))
+                .filter(|p| p.sum < object_sum)
+        } else {
+            None
+        };
+        spatial
+            .or_else(|| object.map(|(o, sum)| self.object_partition(refs, &o, sum)))
+            .map(|partition| {
+                let sum = partition.sum;
+                (partition, sum)
+            })
+    }
+
+    /// In triangle id order.
+    fn count_split(&mut self, node: &NodeReferences) -> Partition {
+        let refs = &node.refs;
         let mid = refs.len() / 2;
         Partition::new(refs[..mid].to_vec(), refs[mid..].to_vec(), refs.len())
     }
 
-    /// How to handle a node with references `refs` and box `bounds`: `None` makes it a leaf.
-    fn choose_split(
+    /// The children share the budget left after the split in proportion to their reference
+    /// counts.
+    fn divide(
         &mut self,
-        refs: &[Reference],
-        bounds: &Aabb,
-        budget: usize,
-    ) -> Option<Partition> {
-        let n = refs.len();
-        if n <= 1 {
-            return None;
-        }
-        let must_split = n > self.max_leaf_size;
-        let area = bounds.surface_area();
-        if area > 0.0 && area.is_finite() {
-            let object = self.find_object_split(refs);
-            let object_sum = object.as_ref().map_or(f32::INFINITY, |o| o.sum);
-            let try_spatial = self.root_area > 0.0
-                && self.root_area.is_finite()
-                && object.as_ref().is_none_or(|o| {
-                    let overlap = intersection(&o.left_bounds, &o.right_bounds);
-                    overlap.surface_area() / self.root_area > OVERLAP_THRESHOLD
-                });
-            let spatial = if try_spatial {
-                self.find_spatial_split(refs, bounds, budget)
-                    .filter(|c| c.sum < object_sum)
-                    .and_then(|c| self.spatial_partition(refs, c.axis, c.position, budget))
-                    .filter(|p| p.sum < object_sum)
-            } else {
-                None
-            };
-            let best = spatial.or_else(|| object.map(|o| self.object_partition(refs, &o)));
-            if let Some(partition) = best {
-                let split_cost = self.params.ci + self.params.ct * partition.sum / area;
-                let leaf_cost = self.params.ct * n as f32;
-                return (must_split || split_cost < leaf_cost).then_some(partition);
-            }
-        }
-        must_split.then(|| Self::median_partition(refs))
+        node: NodeReferences,
+        partition: Partition,
+    ) -> [(NodeReferences, Aabb); 2] {
+        let remaining = node.budget - partition.duplicates;
+        let (nl, nr) = (partition.left.len(), partition.right.len());
+        let left_budget = (remaining as u128 * nl as u128 / (nl + nr) as u128) as usize;
+        let left = NodeReferences {
+            refs: partition.left,
+            budget: left_budget,
+        };
+        let right = NodeReferences {
+            refs: partition.right,
+            budget: remaining - left_budget,
+        };
+        [
+            (left, partition.left_bounds),
+            (right, partition.right_bounds),
+        ]
+    }
+
+    /// In the sweep builder's order (by centroid x, then id): identical trees where no spatial
+    /// split happens.
+    fn emit_leaf(&mut self, node: NodeReferences, prim_indices: &mut Vec<u32>) {
+        let mut refs = node.refs;
+        refs.sort_unstable_by_key(|r| centroid_key(r.bounds.centroid().x, r.tri));
+        prim_indices.extend(refs.iter().map(|r| r.tri));
     }
 }
 
@@ -768,17 +693,9 @@ impl Builder<'_> {
 /// If `triangles` has more than 2^30 entries (node indices must stay clear of the leaf flag).
 pub fn build_sbvh(triangles: &[Triangle], params: &SahParams) -> Bvh {
     let n = triangles.len();
-    if n == 0 {
-        return Bvh::default();
-    }
-    let max_references = (LEAF_FLAG / 2) as usize;
-    assert!(
-        n <= max_references,
-        "too many triangles for the node layout: {n}"
-    );
     let budget = n
         .saturating_mul(EXTRA_REFERENCES_PER_TRIANGLE)
-        .min(max_references - n);
+        .min(MAX_REFERENCES.saturating_sub(n));
     let refs: Vec<Reference> = triangles
         .iter()
         .enumerate()
@@ -788,69 +705,17 @@ pub fn build_sbvh(triangles: &[Triangle], params: &SahParams) -> Bvh {
         })
         .collect();
     let root_bounds = union_all(&refs);
-    let mut builder = Builder {
+    let mut splitter = SbvhSplitter {
         triangles,
-        params: *params,
-        max_leaf_size: params.max_leaf_size.max(1) as usize,
         root_area: root_bounds.surface_area(),
+        sweep: ObjectSweep::new(),
         keys: Vec::with_capacity(n),
         best_keys: Vec::with_capacity(n),
         sorted_boxes: Vec::with_capacity(n),
-        suffix_area: Vec::with_capacity(n),
         goes_left: Vec::with_capacity(n),
     };
-
-    let mut nodes: Vec<BvhNode> = Vec::with_capacity(2 * n - 1);
-    let mut prim_indices: Vec<u32> = Vec::with_capacity(n);
-    let mut stack = vec![Task {
-        refs,
-        bounds: root_bounds,
-        budget,
-        parent: None,
-    }];
-    while let Some(task) = stack.pop() {
-        let index = nodes.len();
-        match task.parent {
-            Some((parent, false)) => nodes[parent].left_or_first = index as u32,
-            Some((parent, true)) => nodes[parent].right_or_count = index as u32,
-            None => {}
-        }
-        match builder.choose_split(&task.refs, &task.bounds, task.budget) {
-            None => {
-                // In the sweep builder's order (by centroid x, then id): identical trees where
-                // no spatial split happens.
-                let mut refs = task.refs;
-                refs.sort_unstable_by_key(|r| sort_key(r.bounds.centroid().x, r.tri));
-                let first = prim_indices.len() as u32;
-                prim_indices.extend(refs.iter().map(|r| r.tri));
-                nodes.push(BvhNode::leaf(task.bounds, first, refs.len() as u32));
-            }
-            Some(partition) => {
-                drop(task.refs);
-                // Children are patched in when they are emitted.
-                nodes.push(BvhNode::internal(task.bounds, 0, 0));
-                let remaining = task.budget - partition.duplicates;
-                let (nl, nr) = (partition.left.len(), partition.right.len());
-                let left_budget = (remaining as u128 * nl as u128 / (nl + nr) as u128) as usize;
-                stack.push(Task {
-                    refs: partition.right,
-                    bounds: partition.right_bounds,
-                    budget: remaining - left_budget,
-                    parent: Some((index, true)),
-                });
-                stack.push(Task {
-                    refs: partition.left,
-                    bounds: partition.left_bounds,
-                    budget: left_budget,
-                    parent: Some((index, false)),
-                });
-            }
-        }
-    }
-    Bvh {
-        nodes,
-        prim_indices,
-    }
+    let root = NodeReferences { refs, budget };
+    topdown::build(&mut splitter, root, root_bounds, params)
 }
 
 #[cfg(test)]

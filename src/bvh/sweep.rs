@@ -2,58 +2,25 @@
 //! 1990; the full-sweep formulation as in Wald, "On fast Construction of SAH-based Bounding Volume
 //! Hierarchies", 2007). A quality anchor and test oracle, never the per-frame path.
 //!
-//! Each node considers every split position of its primitives sorted by centroid along each of the
-//! three axes. A split into L and R costs `Ci + Ct·(A(L)·N(L) + A(R)·N(R)) / A(node)`, the node as
-//! a leaf costs `Ct·N` (SAH constants from [`SahParams`]: Ci = 1.2, Ct = 1.0 by default, the
-//! paper's). The node becomes a leaf when `N ≤ max_leaf_size` and the leaf is no more expensive
-//! than the best split; it is always split when `N > max_leaf_size`.
+//! Object splits only: each node considers every split position of its primitives sorted by
+//! centroid along each of the three axes. The cost model, the leaf rule, the sweep and the node
+//! layout are the shared top-down core's (`topdown.rs`); degenerate nodes (zero or non-finite
+//! surface area, or all centroids equal) are split by count in the middle, along the axis of
+//! largest centroid extent, when they must be split.
 //!
 //! Implementation: the primitives are sorted by centroid once per axis; each node owns the same
 //! range `[start, end)` of the three sorted arrays, and after a split the two arrays not split
 //! along are partitioned stably (the standard three-array approach), so a node costs O(N) and the
 //! build O(n log n) for balanced splits. Each array carries the primitives' boxes next to their
-//! ids, so sweeps and partitions stream through memory. Suffix areas are precomputed right to left
-//! and prefix boxes accumulated while sweeping left to right. An explicit stack replaces recursion
-//! (trees can be deep). Node boxes are exact unions of the triangles' vertex boxes.
-//!
-//! Degenerate nodes (zero or non-finite surface area, or all centroids equal) are split by count
-//! in the middle when `N > max_leaf_size`, and made leaves otherwise.
+//! ids, so sweeps and partitions stream through memory. Node boxes are exact unions of the
+//! triangles' vertex boxes.
 
-use super::{Bvh, BvhNode, SahParams, LEAF_FLAG};
+use std::ops::Range;
+
+use super::topdown::{self, centroid_key, NodeSplitter, ObjectSplit, ObjectSweep};
+use super::{Bvh, SahParams};
 use crate::geometry::Aabb;
 use crate::scene::Triangle;
-
-/// A chosen split of a node's range: the first `left_count` primitives along `axis` go left.
-struct Split {
-    axis: usize,
-    left_count: usize,
-    left_bounds: Aabb,
-    right_bounds: Aabb,
-}
-
-/// A node still to be emitted: its range in the sorted arrays, its bounds, and where to write its
-/// index in the parent (`(parent, is_right)`; `None` for the root).
-struct Task {
-    start: usize,
-    end: usize,
-    bounds: Aabb,
-    parent: Option<(usize, bool)>,
-}
-
-/// A key whose unsigned order is the total order of `f32` values, with the index as tie-break.
-fn sort_key(value: f32, index: u32) -> u64 {
-    let bits = value.to_bits();
-    let ordered = if bits & 0x8000_0000 != 0 {
-        !bits
-    } else {
-        bits | 0x8000_0000
-    };
-    (u64::from(ordered) << 32) | u64::from(index)
-}
-
-fn union_all(boxes: &[Aabb]) -> Aabb {
-    boxes.iter().fold(Aabb::EMPTY, |b, &t| b.union(t))
-}
 
 /// Primitives sorted by centroid along one axis: ids and their boxes, partitioned per node.
 struct Sorted {
@@ -61,109 +28,75 @@ struct Sorted {
     boxes: Vec<Aabb>,
 }
 
-struct Builder {
-    params: SahParams,
-    max_leaf_size: usize,
+/// Object splits over the three sorted arrays; a node is a range `[start, end)` of all three.
+struct SweepSplitter {
     /// Sorted along x, y and z.
     sorted: [Sorted; 3],
-    /// Scratch: suffix areas of the current sweep (relative to the node's start).
-    suffix_area: Vec<f32>,
+    sweep: ObjectSweep,
     /// Scratch: which side each primitive (by id) goes to in the current partition.
     goes_left: Vec<bool>,
     /// Scratch: the right-hand side during a stable partition.
     scratch: Sorted,
 }
 
-impl Builder {
-    /// Extent of the centroids of `[start, end)` along `axis` (the range is sorted along it).
-    fn centroid_extent(&self, axis: usize, start: usize, end: usize) -> f32 {
-        let boxes = &self.sorted[axis].boxes;
-        boxes[end - 1].centroid()[axis] - boxes[start].centroid()[axis]
+fn union_all(boxes: &[Aabb]) -> Aabb {
+    boxes.iter().fold(Aabb::EMPTY, |b, &t| b.union(t))
+}
+
+/// Extent of the centroids of `boxes` along `axis` (the boxes are sorted along it).
+fn centroid_extent(boxes: &[Aabb], axis: usize) -> f32 {
+    boxes[boxes.len() - 1].centroid()[axis] - boxes[0].centroid()[axis]
+}
+
+impl NodeSplitter for SweepSplitter {
+    type Node = Range<usize>;
+    type Split = ObjectSplit;
+
+    fn count(&self, range: &Range<usize>) -> usize {
+        range.len()
     }
 
-    /// The best full-sweep SAH split over all axes with a non-zero centroid extent, if any has a
-    /// finite cost: returns the split and its cost sum `A(L)·N(L) + A(R)·N(R)`.
-    fn best_sweep_split(&mut self, start: usize, end: usize) -> Option<(Split, f32)> {
-        let count = end - start;
-        // (axis, left count, left bounds, cost sum)
-        let mut best: Option<(usize, usize, Aabb, f32)> = None;
+    fn best_split(&mut self, range: &Range<usize>, _: &Aabb) -> Option<(ObjectSplit, f32)> {
+        let mut search = self.sweep.search();
         for axis in 0..3 {
-            if self.centroid_extent(axis, start, end) <= 0.0 {
+            let boxes = &self.sorted[axis].boxes[range.clone()];
+            if centroid_extent(boxes, axis) <= 0.0 {
                 continue;
             }
-            let boxes = &self.sorted[axis].boxes[start..end];
-            let mut acc = Aabb::EMPTY;
-            for i in (1..count).rev() {
-                acc = acc.union(boxes[i]);
-                self.suffix_area[i] = acc.surface_area();
-            }
-            let mut left = Aabb::EMPTY;
-            for i in 1..count {
-                left = left.union(boxes[i - 1]);
-                let sum = left.surface_area() * i as f32 + self.suffix_area[i] * (count - i) as f32;
-                if sum < best.map_or(f32::INFINITY, |b| b.3) {
-                    best = Some((axis, i, left, sum));
-                }
-            }
+            search.sweep_axis(axis, boxes);
         }
-        best.map(|(axis, left_count, left_bounds, sum)| {
-            let right = &self.sorted[axis].boxes[start + left_count..end];
-            let split = Split {
-                axis,
-                left_count,
-                left_bounds,
-                right_bounds: union_all(right),
-            };
-            (split, sum)
+        search.finish(|axis, left_count| {
+            self.sorted[axis].boxes[range.start + left_count..range.end]
+                .iter()
+                .copied()
         })
     }
 
     /// Count split in the middle along the axis of largest centroid extent.
-    fn median_split(&self, start: usize, end: usize) -> Split {
+    fn count_split(&mut self, range: &Range<usize>) -> ObjectSplit {
         let mut axis = 0;
         let mut widest = f32::NEG_INFINITY;
         for a in 0..3 {
-            let extent = self.centroid_extent(a, start, end);
+            let extent = centroid_extent(&self.sorted[a].boxes[range.clone()], a);
             if extent > widest {
                 widest = extent;
                 axis = a;
             }
         }
-        let mid = start + (end - start) / 2;
+        let mid = range.start + range.len() / 2;
         let boxes = &self.sorted[axis].boxes;
-        Split {
+        ObjectSplit {
             axis,
-            left_count: mid - start,
-            left_bounds: union_all(&boxes[start..mid]),
-            right_bounds: union_all(&boxes[mid..end]),
+            left_count: mid - range.start,
+            left_bounds: union_all(&boxes[range.start..mid]),
+            right_bounds: union_all(&boxes[mid..range.end]),
         }
     }
 
-    /// How to handle the node `[start, end)` with box `bounds`: `None` makes it a leaf.
-    fn choose_split(&mut self, start: usize, end: usize, bounds: &Aabb) -> Option<Split> {
-        let count = end - start;
-        if count == 1 {
-            return None;
-        }
-        let must_split = count > self.max_leaf_size;
-        let area = bounds.surface_area();
-        if area > 0.0 && area.is_finite() {
-            if let Some((split, sum)) = self.best_sweep_split(start, end) {
-                let split_cost = self.params.ci + self.params.ct * sum / area;
-                let leaf_cost = self.params.ct * count as f32;
-                return if must_split || split_cost < leaf_cost {
-                    Some(split)
-                } else {
-                    None
-                };
-            }
-        }
-        must_split.then(|| self.median_split(start, end))
-    }
-
-    /// Applies `split` to `[start, end)`: the split axis is already ordered; the other two arrays
-    /// are partitioned stably so every array holds the left set first.
-    fn partition(&mut self, start: usize, end: usize, split: &Split) {
+    /// The split axis is already ordered; the other two arrays are partitioned stably so every
+    /// array holds the left set first.
+    fn divide(&mut self, range: Range<usize>, split: ObjectSplit) -> [(Range<usize>, Aabb); 2] {
+        let Range { start, end } = range;
         let mid = start + split.left_count;
         let split_ids = &self.sorted[split.axis].ids;
         for &p in &split_ids[start..mid] {
@@ -192,6 +125,15 @@ impl Builder {
             ids[mid..end].copy_from_slice(&self.scratch.ids[..right]);
             boxes[mid..end].copy_from_slice(&self.scratch.boxes[..right]);
         }
+        [
+            (start..mid, split.left_bounds),
+            (mid..end, split.right_bounds),
+        ]
+    }
+
+    /// In the x array's order.
+    fn emit_leaf(&mut self, range: Range<usize>, prim_indices: &mut Vec<u32>) {
+        prim_indices.extend_from_slice(&self.sorted[0].ids[range]);
     }
 }
 
@@ -202,20 +144,12 @@ impl Builder {
 /// triangles (a maximum of 0 is treated as 1). An empty input gives a tree with no nodes.
 pub fn build_sweep_sah(triangles: &[Triangle], params: &SahParams) -> Bvh {
     let n = triangles.len();
-    if n == 0 {
-        return Bvh::default();
-    }
-    // Node indices (up to 2n − 1) must stay clear of the leaf flag bit.
-    assert!(
-        n <= (LEAF_FLAG / 2) as usize,
-        "too many triangles for the node layout: {n}"
-    );
     let boxes: Vec<Aabb> = triangles.iter().map(Triangle::bounds).collect();
     let sorted = std::array::from_fn(|axis| {
         let mut keys: Vec<u64> = boxes
             .iter()
             .enumerate()
-            .map(|(i, b)| sort_key(b.centroid()[axis], i as u32))
+            .map(|(i, b)| centroid_key(b.centroid()[axis], i as u32))
             .collect();
         keys.sort_unstable();
         let ids: Vec<u32> = keys.into_iter().map(|k| k as u32).collect();
@@ -224,72 +158,22 @@ pub fn build_sweep_sah(triangles: &[Triangle], params: &SahParams) -> Bvh {
     });
     let root_bounds = union_all(&boxes);
     drop(boxes);
-    let mut builder = Builder {
-        params: *params,
-        max_leaf_size: params.max_leaf_size.max(1) as usize,
+    let mut splitter = SweepSplitter {
         sorted,
-        suffix_area: vec![0.0; n],
+        sweep: ObjectSweep::new(),
         goes_left: vec![false; n],
         scratch: Sorted {
             ids: vec![0; n],
             boxes: vec![Aabb::EMPTY; n],
         },
     };
-
-    let mut nodes: Vec<BvhNode> = Vec::with_capacity(2 * n - 1);
-    let mut prim_indices: Vec<u32> = Vec::with_capacity(n);
-    let mut stack = vec![Task {
-        start: 0,
-        end: n,
-        bounds: root_bounds,
-        parent: None,
-    }];
-    while let Some(task) = stack.pop() {
-        let index = nodes.len();
-        match task.parent {
-            Some((parent, false)) => nodes[parent].left_or_first = index as u32,
-            Some((parent, true)) => nodes[parent].right_or_count = index as u32,
-            None => {}
-        }
-        let Task {
-            start, end, bounds, ..
-        } = task;
-        match builder.choose_split(start, end, &bounds) {
-            None => {
-                let first = prim_indices.len() as u32;
-                prim_indices.extend_from_slice(&builder.sorted[0].ids[start..end]);
-                nodes.push(BvhNode::leaf(bounds, first, (end - start) as u32));
-            }
-            Some(split) => {
-                builder.partition(start, end, &split);
-                let mid = start + split.left_count;
-                // Children are patched in when they are emitted.
-                nodes.push(BvhNode::internal(bounds, 0, 0));
-                stack.push(Task {
-                    start: mid,
-                    end,
-                    bounds: split.right_bounds,
-                    parent: Some((index, true)),
-                });
-                stack.push(Task {
-                    start,
-                    end: mid,
-                    bounds: split.left_bounds,
-                    parent: Some((index, false)),
-                });
-            }
-        }
-    }
-    Bvh {
-        nodes,
-        prim_indices,
-    }
+    topdown::build(&mut splitter, 0..n, root_bounds, params)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bvh::{sah_cost, validate};
+    use crate::bvh::{sah_cost, validate, BvhNode};
     use glam::Vec3;
     use rand::{Rng, SeedableRng};
     use rand_pcg::Pcg64;

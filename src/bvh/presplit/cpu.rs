@@ -5,7 +5,7 @@
 
 use glam::{UVec3, Vec3};
 
-use crate::geometry::Aabb;
+use crate::geometry::{Aabb, Crossing, HalfSpace, Polygon};
 use crate::gpu::constants::{MAX_SPLITS, MORTON_GRID};
 use crate::scene::Triangle;
 
@@ -129,40 +129,27 @@ pub fn budget_scale(priorities: &[f32], budget: u32) -> f32 {
     f32::from_bits(lo)
 }
 
-/// The box of triangle `t` clipped to [lo, hi] (Sutherland–Hodgman), or None if nothing is left.
+/// Vertex capacity of a clipped triangle, as in the kernel (which drops vertices beyond it).
+const MAX_POLYGON: usize = 9;
+
+/// The box of triangle `t` clipped to [lo, hi] (Sutherland–Hodgman against the six planes, lower
+/// planes first, crossings as the kernel computes them), or None if nothing is left.
 fn clip_triangle(t: &Triangle, lo: Vec3, hi: Vec3) -> Option<(Vec3, Vec3)> {
-    let mut poly: Vec<Vec3> = t.vertices().to_vec();
+    let mut poly = Polygon::<Vec3, MAX_POLYGON>::triangle(t.vertices());
     for plane in 0..6 {
         let axis = plane % 3;
-        let keep_below = plane >= 3;
-        let bound = if keep_below { hi[axis] } else { lo[axis] };
-        let inside = |p: Vec3| {
-            if keep_below {
-                p[axis] <= bound
-            } else {
-                p[axis] >= bound
-            }
+        let (bound, keep) = if plane >= 3 {
+            (hi[axis], HalfSpace::Below)
+        } else {
+            (lo[axis], HalfSpace::Above)
         };
-        let mut next = Vec::with_capacity(9);
-        for k in 0..poly.len() {
-            let (a, b) = (poly[k], poly[(k + 1) % poly.len()]);
-            if inside(a) && next.len() < 9 {
-                next.push(a);
-            }
-            if inside(a) != inside(b) && next.len() < 9 {
-                let s = (bound - a[axis]) / (b[axis] - a[axis]);
-                let mut p = a + Vec3::new(s * (b.x - a.x), s * (b.y - a.y), s * (b.z - a.z));
-                p[axis] = bound;
-                next.push(p);
-            }
-        }
-        poly = next;
+        poly = poly.clip(axis, bound, keep, Crossing::Interpolated);
     }
-    if poly.is_empty() {
+    if poly.vertices().is_empty() {
         return None;
     }
     let (mut plo, mut phi) = (Vec3::splat(f32::MAX), Vec3::splat(-f32::MAX));
-    for p in &poly {
+    for p in poly.vertices() {
         plo = plo.min(*p);
         phi = phi.max(*p);
     }
