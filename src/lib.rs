@@ -8,6 +8,7 @@
 //! GPU animation, rebuilds and refits).
 
 pub mod anim;
+#[cfg(feature = "app")]
 pub mod app;
 pub mod bvh;
 pub mod device;

@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::{assert_clean_failure, gpu, missing_shared_scene, run_treelet};
+use common::{gpu, missing_shared_scene};
 use treelet::anim::{load_animation, Animation, Explosion, Flag, RigidBodies};
 use treelet::bvh::treelet::TreeletSettings;
 use treelet::bvh::{sah_cost, validate, Builder, SahParams, TreeUpdater, UpdateMode};
@@ -164,11 +164,12 @@ fn refits_keep_valid_boxes_and_lose_quality_when_the_mesh_bursts() {
     }
 }
 
+#[cfg(feature = "app")]
 #[test]
 fn headless_animation_writes_one_png_per_frame() {
     let out = std::env::temp_dir().join(format!("treelet-anim-frames-{}", std::process::id()));
     std::fs::remove_dir_all(&out).ok();
-    let output = run_treelet(&[
+    let output = common::run_treelet(&[
         "render",
         "--scene",
         "flag",
@@ -240,6 +241,7 @@ fn bart_kitchen_through_the_animation_path_equals_evaluate() {
     assert_eq!(animation.materials(), reference.materials());
 }
 
+#[cfg(feature = "app")]
 #[test]
 fn animated_render_errors_are_clear() {
     for (args, expected) in [
@@ -251,6 +253,6 @@ fn animated_render_errors_are_clear() {
         (&["render", "--frames", "0"][..], "--frames"),
         (&["render", "--json"][..], "--frames"),
     ] {
-        assert_clean_failure(args, expected);
+        common::assert_clean_failure(args, expected);
     }
 }

@@ -87,6 +87,7 @@ fn every_kernel_matches_its_declaration() {
     }
 }
 
+#[cfg(feature = "app")]
 #[test]
 fn the_render_shader_validates() {
     parse("image_display", treelet::app::DISPLAY_SHADER);

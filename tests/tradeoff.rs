@@ -2,11 +2,8 @@
 //! times and throughputs, analytically known crossovers), and `treelet tradeoff` end to end on
 //! `cornell` at a tiny resolution (CSV, JSON and PNG outputs).
 
-use std::path::{Path, PathBuf};
-
 mod common;
 
-use common::run_treelet as treelet;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 use treelet::tradeoff::{best_ranges, effective_mrays, BestRange, Measurement, RAYS_RANGE};
@@ -162,139 +159,142 @@ fn ranges_match_a_brute_force_search() {
     }
 }
 
-fn out_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("treelet-tradeoff-{name}-{}", std::process::id()));
-    std::fs::remove_dir_all(&dir).ok();
-    dir
-}
+/// `treelet tradeoff` end to end (the command line needs feature "app").
+#[cfg(feature = "app")]
+mod command_line {
+    use std::path::{Path, PathBuf};
 
-#[test]
-fn tradeoff_writes_csv_json_and_charts() {
-    let dir = out_dir("cornell");
-    let out = treelet(&[
-        "tradeoff",
-        "--scene",
-        "cornell",
-        "--out",
-        dir.to_str().unwrap(),
-        "--width",
-        "32",
-        "--height",
-        "24",
-        "--spp",
-        "1",
-        "--repeats",
-        "1",
-        "--quick",
-    ]);
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "tradeoff failed: {stderr}");
+    use super::common::run_treelet as treelet;
 
-    let csv = std::fs::read_to_string(dir.join("tradeoff-cornell.csv")).unwrap();
-    let mut lines = csv.lines();
-    assert_eq!(
-        lines.next().unwrap(),
-        "label,builder,treelet_size,rounds,build_ms,sah,mrays_per_s,best_from_rays,best_to_rays"
-    );
-    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
-    for row in &rows {
-        assert_eq!(row.len(), 9, "{row:?}");
-        for value in &row[4..7] {
-            let v: f64 = value.parse().unwrap();
-            assert!(v.is_finite() && v >= 0.0, "{row:?}");
-        }
+    fn out_dir(name: &str) -> PathBuf {
+        let dir =
+            std::env::temp_dir().join(format!("treelet-tradeoff-{name}-{}", std::process::id()));
+        std::fs::remove_dir_all(&dir).ok();
+        dir
     }
-    let labels: Vec<&str> = rows.iter().map(|r| r[0]).collect();
-    for expected in ["lbvh", "trbvh n=5 r=1", "sweep"] {
-        assert!(labels.contains(&expected), "{expected} missing: {labels:?}");
-    }
-    let trbvh = rows.iter().find(|r| r[0] == "trbvh n=5 r=1").unwrap();
-    assert_eq!((trbvh[1], trbvh[2], trbvh[3]), ("trbvh", "5", "1"));
-    assert!(
-        rows.iter().any(|r| !r[7].is_empty() && !r[8].is_empty()),
-        "some configuration is best somewhere"
-    );
 
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("tradeoff-cornell.json")).unwrap())
-            .unwrap();
-    assert_eq!(json["scene"], "cornell");
-    assert!(json["triangles"].as_u64().unwrap() > 0);
-    assert!(!json["adapter"].as_str().unwrap().is_empty());
-    let measurements = json["measurements"].as_array().unwrap();
-    assert_eq!(measurements.len(), rows.len());
-    assert!(measurements.iter().all(|m| m["valid"] == true));
-    let rays = json["curves"]["rays"].as_array().unwrap();
-    assert_eq!(rays.len(), 61);
-    assert_eq!(rays[0].as_f64().unwrap(), 1e6);
-    let series = json["curves"]["series"].as_array().unwrap();
-    assert_eq!(series.len(), rows.len());
-    for (s, label) in series.iter().zip(&labels) {
-        assert_eq!(s["label"], *label);
-        assert_eq!(s["effective_mrays"].as_array().unwrap().len(), rays.len());
-    }
-    let ranges = json["best_ranges"].as_array().unwrap();
-    assert_eq!(ranges[0]["from_rays"].as_f64().unwrap(), 1e6);
-    assert_eq!(ranges.last().unwrap()["to_rays"].as_f64().unwrap(), 1e12);
-    // Among GPU builders only, every winner is a GPU configuration.
-    let gpu_labels: Vec<&str> = measurements
-        .iter()
-        .filter(|m| m["gpu"] == true)
-        .map(|m| m["label"].as_str().unwrap())
-        .collect();
-    let gpu_ranges = json["best_ranges_gpu_only"].as_array().unwrap();
-    assert!(!gpu_ranges.is_empty());
-    for r in gpu_ranges {
-        assert!(gpu_labels.contains(&r["label"].as_str().unwrap()), "{r}");
-    }
-    assert!(!json["pareto_front"].as_array().unwrap().is_empty());
-
-    let size = (
-        json["charts"]["width"].as_u64().unwrap() as u32,
-        json["charts"]["height"].as_u64().unwrap() as u32,
-    );
-    for key in ["throughput", "pareto"] {
-        let file = json["charts"][key].as_str().unwrap();
-        assert_eq!(file, format!("tradeoff-cornell-{key}.png"));
-        assert_chart(&dir.join(file), size);
-    }
-    std::fs::remove_dir_all(&dir).ok();
-}
-
-/// The PNG decodes to an image of `size` with something drawn on it.
-fn assert_chart(path: &Path, size: (u32, u32)) {
-    let image = image::open(path)
-        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-        .to_rgb8();
-    assert_eq!(image.dimensions(), size, "{}", path.display());
-    assert!(size.0 > 0 && size.1 > 0);
-    let colours: std::collections::HashSet<[u8; 3]> = image.pixels().map(|p| p.0).collect();
-    assert!(
-        colours.len() > 16,
-        "{} has only {} colours",
-        path.display(),
-        colours.len()
-    );
-}
-
-#[test]
-fn tradeoff_bad_flags_are_clear_errors() {
-    for (args, expected) in [
-        (vec!["tradeoff", "--spp", "0"], "--spp"),
-        (
-            vec!["tradeoff", "--scene", "no-such-scene"],
-            "unknown scene",
-        ),
-        (vec!["tradeoff", "--width", "0"], "must be positive"),
-        (vec!["tradeoff", "--repeats", "x"], "invalid value"),
-    ] {
-        let out = treelet(&args);
+    #[test]
+    fn tradeoff_writes_csv_json_and_charts() {
+        let dir = out_dir("cornell");
+        let out = treelet(&[
+            "tradeoff",
+            "--scene",
+            "cornell",
+            "--out",
+            dir.to_str().unwrap(),
+            "--width",
+            "32",
+            "--height",
+            "24",
+            "--spp",
+            "1",
+            "--repeats",
+            "1",
+            "--quick",
+        ]);
         let stderr = String::from_utf8_lossy(&out.stderr);
-        assert!(!out.status.success(), "{args:?} succeeded");
-        assert!(!stderr.contains("panicked"), "{args:?} panicked: {stderr}");
-        assert!(
-            stderr.contains(expected),
-            "{args:?}: expected '{expected}' in: {stderr}"
+        assert!(out.status.success(), "tradeoff failed: {stderr}");
+
+        let csv = std::fs::read_to_string(dir.join("tradeoff-cornell.csv")).unwrap();
+        let mut lines = csv.lines();
+        assert_eq!(
+            lines.next().unwrap(),
+            "label,builder,treelet_size,rounds,build_ms,sah,mrays_per_s,best_from_rays,best_to_rays"
         );
+        let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+        for row in &rows {
+            assert_eq!(row.len(), 9, "{row:?}");
+            for value in &row[4..7] {
+                let v: f64 = value.parse().unwrap();
+                assert!(v.is_finite() && v >= 0.0, "{row:?}");
+            }
+        }
+        let labels: Vec<&str> = rows.iter().map(|r| r[0]).collect();
+        for expected in ["lbvh", "trbvh n=5 r=1", "sweep"] {
+            assert!(labels.contains(&expected), "{expected} missing: {labels:?}");
+        }
+        let trbvh = rows.iter().find(|r| r[0] == "trbvh n=5 r=1").unwrap();
+        assert_eq!((trbvh[1], trbvh[2], trbvh[3]), ("trbvh", "5", "1"));
+        assert!(
+            rows.iter().any(|r| !r[7].is_empty() && !r[8].is_empty()),
+            "some configuration is best somewhere"
+        );
+
+        let json: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(dir.join("tradeoff-cornell.json")).unwrap(),
+        )
+        .unwrap();
+        assert_eq!(json["scene"], "cornell");
+        assert!(json["triangles"].as_u64().unwrap() > 0);
+        assert!(!json["adapter"].as_str().unwrap().is_empty());
+        let measurements = json["measurements"].as_array().unwrap();
+        assert_eq!(measurements.len(), rows.len());
+        assert!(measurements.iter().all(|m| m["valid"] == true));
+        let rays = json["curves"]["rays"].as_array().unwrap();
+        assert_eq!(rays.len(), 61);
+        assert_eq!(rays[0].as_f64().unwrap(), 1e6);
+        let series = json["curves"]["series"].as_array().unwrap();
+        assert_eq!(series.len(), rows.len());
+        for (s, label) in series.iter().zip(&labels) {
+            assert_eq!(s["label"], *label);
+            assert_eq!(s["effective_mrays"].as_array().unwrap().len(), rays.len());
+        }
+        let ranges = json["best_ranges"].as_array().unwrap();
+        assert_eq!(ranges[0]["from_rays"].as_f64().unwrap(), 1e6);
+        assert_eq!(ranges.last().unwrap()["to_rays"].as_f64().unwrap(), 1e12);
+        // Among GPU builders only, every winner is a GPU configuration.
+        let gpu_labels: Vec<&str> = measurements
+            .iter()
+            .filter(|m| m["gpu"] == true)
+            .map(|m| m["label"].as_str().unwrap())
+            .collect();
+        let gpu_ranges = json["best_ranges_gpu_only"].as_array().unwrap();
+        assert!(!gpu_ranges.is_empty());
+        for r in gpu_ranges {
+            assert!(gpu_labels.contains(&r["label"].as_str().unwrap()), "{r}");
+        }
+        assert!(!json["pareto_front"].as_array().unwrap().is_empty());
+
+        let size = (
+            json["charts"]["width"].as_u64().unwrap() as u32,
+            json["charts"]["height"].as_u64().unwrap() as u32,
+        );
+        for key in ["throughput", "pareto"] {
+            let file = json["charts"][key].as_str().unwrap();
+            assert_eq!(file, format!("tradeoff-cornell-{key}.png"));
+            assert_chart(&dir.join(file), size);
+        }
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// The PNG decodes to an image of `size` with something drawn on it.
+    fn assert_chart(path: &Path, size: (u32, u32)) {
+        let image = image::open(path)
+            .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+            .to_rgb8();
+        assert_eq!(image.dimensions(), size, "{}", path.display());
+        assert!(size.0 > 0 && size.1 > 0);
+        let colours: std::collections::HashSet<[u8; 3]> = image.pixels().map(|p| p.0).collect();
+        assert!(
+            colours.len() > 16,
+            "{} has only {} colours",
+            path.display(),
+            colours.len()
+        );
+    }
+
+    #[test]
+    fn tradeoff_bad_flags_are_clear_errors() {
+        for (args, expected) in [
+            (vec!["tradeoff", "--spp", "0"], "--spp"),
+            (
+                vec!["tradeoff", "--scene", "no-such-scene"],
+                "unknown scene",
+            ),
+            (vec!["tradeoff", "--width", "0"], "must be positive"),
+            (vec!["tradeoff", "--repeats", "x"], "invalid value"),
+        ] {
+            super::common::assert_clean_failure(&args, expected);
+        }
     }
 }

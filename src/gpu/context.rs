@@ -6,7 +6,7 @@ use std::sync::Mutex;
 
 use wgpu::util::DeviceExt;
 
-use super::kernel::{compile, CompiledKernel, KernelInfo};
+use super::kernel::{compile, CompiledKernel, KernelInfo, Slot};
 use crate::{Error, Result};
 
 /// How to choose the adapter.
@@ -18,7 +18,6 @@ pub struct GpuOptions {
 
 /// An open device with what the rest of the crate needs to know about it.
 pub struct GpuContext {
-    pub instance: wgpu::Instance,
     pub adapter: wgpu::Adapter,
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
@@ -81,6 +80,51 @@ impl GpuContext {
             info.driver,
             info.driver_info
         );
+        Self::from_device(adapter, device, queue)
+    }
+
+    /// The limits a device needs for every kernel of the crate: wgpu's defaults, with as many
+    /// storage buffers per shader stage as the kernel with the most bindings has. (Larger scenes
+    /// need larger `max_storage_buffer_binding_size` and `max_buffer_size`; buffers are checked
+    /// against the device's limits when created.)
+    pub fn required_limits() -> wgpu::Limits {
+        let storage_buffers = crate::kernels::ALL
+            .iter()
+            .map(|k| k.slots.iter().filter(|s| **s != Slot::Params).count() as u32)
+            .max()
+            .unwrap_or(0);
+        wgpu::Limits {
+            max_storage_buffers_per_shader_stage: storage_buffers,
+            ..wgpu::Limits::default()
+        }
+    }
+
+    /// Wraps a device the caller opened (e.g. a renderer that shares its buffers with the
+    /// builders: see `device::Geometry::from_buffer`). Fails with a clear error when the device's
+    /// limits are below `required_limits`. Timestamps are used when the device has the
+    /// `TIMESTAMP_QUERY` and `TIMESTAMP_QUERY_INSIDE_ENCODERS` features.
+    pub fn from_device(
+        adapter: wgpu::Adapter,
+        device: wgpu::Device,
+        queue: wgpu::Queue,
+    ) -> Result<Self> {
+        let info = adapter.get_info();
+        let mut short = Vec::new();
+        Self::required_limits().check_limits_with_fail_fn(
+            &device.limits(),
+            false,
+            |name, needed, allowed| short.push(format!("{name} is {allowed}, needs {needed}")),
+        );
+        if !short.is_empty() {
+            return Err(Error::Gpu(format!(
+                "the device's limits are too low for treelet's kernels ({}); request \
+                 GpuContext::required_limits() when opening it",
+                short.join(", ")
+            )));
+        }
+        let timestamps = device.features().contains(
+            wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS,
+        );
         let no_count_limit = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("no count limit"),
             contents: bytemuck::bytes_of(&u32::MAX),
@@ -88,11 +132,10 @@ impl GpuContext {
         });
         Ok(Self {
             no_count_limit,
-            instance,
             adapter,
             device,
             queue,
-            timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY),
+            timestamps,
             info,
             kernels: Mutex::default(),
         })

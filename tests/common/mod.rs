@@ -256,6 +256,7 @@ pub fn missing_shared_scene(what: impl std::fmt::Display) {
 }
 
 /// Runs the `treelet` binary with `args` (and a private XDG_RUNTIME_DIR).
+#[cfg(feature = "app")]
 pub fn run_treelet(args: &[&str]) -> std::process::Output {
     let xdg = std::env::temp_dir().join("treelet-test-xdg");
     std::fs::create_dir_all(&xdg).unwrap();
@@ -267,6 +268,7 @@ pub fn run_treelet(args: &[&str]) -> std::process::Output {
 }
 
 /// `treelet args` fails with a message containing `expected`, and without a panic.
+#[cfg(feature = "app")]
 pub fn assert_clean_failure(args: &[&str], expected: &str) {
     let out = run_treelet(args);
     let stderr = String::from_utf8_lossy(&out.stderr);
