@@ -15,7 +15,7 @@ struct CollapseParams {
     row_pitch: u32,
     max_leaf_size: u32,
     ct: f32,
-    // Always 0: see `unfused` in treelet_optimize.wgsl; the area must round as it did there, so
+    // Always 0: see `unfused` in treelet_round.wgsl; the area must round as it did there, so
     // that Ct·A·N <= C finds exactly the leaves the treelet pass chose.
     zero: u32,
     has_refs: u32,

@@ -12,7 +12,7 @@ use rand::Rng;
 use treelet::bvh::lbvh::{build_lbvh_from_boxes_cpu, prim_boxes_cpu};
 use treelet::bvh::treelet::{
     build_trbvh_cpu, optimize_lbvh_cpu, solve_treelet, surface_area, CostModel, TrbvhBuilder,
-    TreeletLeaf, TreeletSettings, WorkingTree,
+    TreeletLeaf, TreeletSettings, WorkingTree, MAX_LEVEL_DISPATCHES,
 };
 use treelet::bvh::{sah_cost, validate, Bvh, SahParams};
 use treelet::device::{Geometry, Tree};
@@ -362,6 +362,24 @@ fn gpu_optimizer_equals_cpu_twin() {
             ..SahParams::default()
         },
     );
+}
+
+/// Each round's schedule (how many levels get a dispatch of their own, the rest being climbed by
+/// one workgroup) does not change the tree: every split of the work agrees with the CPU twin.
+#[test]
+fn every_level_schedule_agrees_with_the_cpu_twin() {
+    let builder =
+        &mut TrbvhBuilder::new(gpu(), TreeletSettings::BALANCED, SahParams::default()).unwrap();
+    for levels in [0, 1, 3, MAX_LEVEL_DISPATCHES] {
+        builder.set_level_dispatches(Some(levels));
+        println!("{levels} level dispatches");
+        check_gpu_against_cpu(builder, random_soup(3000, 44), TreeletSettings::BALANCED);
+        check_gpu_against_cpu(
+            builder,
+            load_scene("field-10k").unwrap().triangles,
+            TreeletSettings::HIGH_QUALITY,
+        );
+    }
 }
 
 /// The agreement checks hold for a device that fuses every Ci·A + children (as GPU compilers may):

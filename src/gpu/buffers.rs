@@ -27,6 +27,17 @@ pub fn storage_buffer<T: Pod>(ctx: &GpuContext, label: &str, data: &[T]) -> Resu
         }))
 }
 
+/// A zero-filled storage buffer of `size` bytes that also holds indirect dispatch arguments.
+pub fn indirect_buffer_zeroed(ctx: &GpuContext, label: &str, size: u64) -> Result<wgpu::Buffer> {
+    check_binding_size(ctx, label, size)?;
+    Ok(ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: size.max(4).next_multiple_of(4),
+        usage: STORAGE | wgpu::BufferUsages::INDIRECT,
+        mapped_at_creation: false,
+    }))
+}
+
 /// A zero-filled storage buffer of `size` bytes.
 pub fn storage_buffer_zeroed(ctx: &GpuContext, label: &str, size: u64) -> Result<wgpu::Buffer> {
     check_binding_size(ctx, label, size)?;

@@ -10,8 +10,12 @@ pub const MISS: u32 = u32::MAX;
 pub const MORTON_GRID: u32 = 1 << 21;
 /// Splits per triangle at most in pre-splitting (pieces ≤ `MAX_SPLITS + 1`).
 pub const MAX_SPLITS: u32 = 31;
-/// Largest treelet (leaves): 2^8 subsets fit the kernel's workgroup memory.
+/// Largest treelet (leaves): each treelet invocation keeps the costs of its 2^8 subsets and
+/// the boxes of two halves of 4 leaves (`treelet_dp.wgsl`).
 pub const MAX_TREELET_SIZE: u32 = 8;
+/// Treelet levels a restructuring round gives one dispatch each at most; the levels above are
+/// climbed by one workgroup (`bvh::treelet`).
+pub const MAX_LEVEL_DISPATCHES: u32 = 24;
 /// Largest leaf the GPU collapse may create (its gather stack holds a leaf's subtree).
 pub const MAX_GPU_LEAF_SIZE: u32 = 32;
 /// Widening of a box's exit distance in the traversal's box test (Ize 2013): rounding never culls
@@ -36,6 +40,7 @@ pub fn wgsl() -> String {
         u32_const("MAX_SPLITS", MAX_SPLITS),
         u32_const("MAX_TREELET", MAX_TREELET_SIZE),
         u32_const("MAX_GPU_LEAF_SIZE", MAX_GPU_LEAF_SIZE),
+        u32_const("MAX_LEVEL_DISPATCHES", MAX_LEVEL_DISPATCHES),
         f32_const("BOX_EXIT_SLACK", BOX_EXIT_SLACK),
         u32_const("RADIX_BITS", RADIX_BITS),
         u32_const("SORT_TILE", SORT_TILE),

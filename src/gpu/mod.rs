@@ -18,7 +18,10 @@ mod shaders;
 mod spread;
 mod timer;
 
-pub use buffers::{bind_entry, read_buffer, storage_buffer, storage_buffer_zeroed, uniform_buffer};
+pub use buffers::{
+    bind_entry, indirect_buffer_zeroed, read_buffer, storage_buffer, storage_buffer_zeroed,
+    uniform_buffer,
+};
 pub use context::{GpuContext, GpuOptions};
 pub use item_count::ItemCount;
 pub(crate) use kernel::kernel;

@@ -157,6 +157,26 @@ impl<'r> Pass<'r> {
         params: &P,
         buffers: &[&wgpu::Buffer],
     ) {
+        self.bind(kernel, params, buffers);
+        let [x, y, z] = grid.groups;
+        self.pass.dispatch_workgroups(x, y, z);
+    }
+
+    /// Like `dispatch`, with the workgroup grid read on the GPU from `args` at byte `offset`
+    /// (three u32: x, y, z; written earlier in the recording).
+    pub fn dispatch_indirect<P: Pod>(
+        &mut self,
+        kernel: &Kernel<P>,
+        args: &wgpu::Buffer,
+        offset: u64,
+        params: &P,
+        buffers: &[&wgpu::Buffer],
+    ) {
+        self.bind(kernel, params, buffers);
+        self.pass.dispatch_workgroups_indirect(args, offset);
+    }
+
+    fn bind<P: Pod>(&mut self, kernel: &Kernel<P>, params: &P, buffers: &[&wgpu::Buffer]) {
         let (chunk, offset) = self.params.push(self.ctx, params);
         let mut bound = Vec::with_capacity(buffers.len() + 1);
         bound.push(&chunk);
@@ -164,7 +184,5 @@ impl<'r> Pass<'r> {
         let group = kernel.bind_group(self.ctx, &bound);
         self.pass.set_pipeline(&kernel.compiled.pipeline);
         self.pass.set_bind_group(0, &group, &[offset]);
-        let [x, y, z] = grid.groups;
-        self.pass.dispatch_workgroups(x, y, z);
     }
 }

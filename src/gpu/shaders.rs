@@ -45,6 +45,14 @@ const INCLUDES: &[(&str, &str)] = &[
         "leaf_gather.wgsl",
         include_str!("../../shaders/include/leaf_gather.wgsl"),
     ),
+    (
+        "treelet_round.wgsl",
+        include_str!("../../shaders/include/treelet_round.wgsl"),
+    ),
+    (
+        "treelet_dp.wgsl",
+        include_str!("../../shaders/include/treelet_dp.wgsl"),
+    ),
 ];
 
 /// `source` with its includes expanded (each file once); `constants.wgsl` is generated from

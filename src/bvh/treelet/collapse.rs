@@ -6,7 +6,7 @@
 use super::dp::CostModel;
 use super::nodes_compact::{CompactParams, NODES_COMPACT};
 use super::nodes_mark::{MarkParams, NODES_MARK};
-use super::treelet_optimize::TreeletState;
+use super::rounds::TreeletState;
 use crate::gpu::{storage_buffer_zeroed, GpuContext, ItemCount, Kernel, Pass};
 use crate::sort::PrefixScan;
 use crate::Result;

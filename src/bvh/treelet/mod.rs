@@ -3,27 +3,34 @@
 //! compaction into the traversal layout.
 //!
 //! Per build, recorded into one recording: the GPU LBVH (`bvh::lbvh`) into a working tree,
-//! `rounds` restructuring rounds (kernel `treelet_optimize`; γ = treelet size, doubling each
-//! round), the collapse into the output tree (`collapse`: kernels `nodes_mark`, `nodes_compact`).
+//! `rounds` restructuring rounds (`rounds`: level by level, kernels `nodes_level`,
+//! `roots_bucket`, `treelets_optimize`, `treelets_climb`; γ = treelet size, doubling each round), the collapse into the output tree (`collapse`: kernels `nodes_mark`, `nodes_compact`).
 //! Each part has a CPU twin (`build_trbvh_cpu`), the test oracle.
 
 mod collapse;
 mod cpu;
 mod dp;
 mod nodes_compact;
+mod nodes_level;
 mod nodes_mark;
-mod treelet_optimize;
+mod roots_bucket;
+mod rounds;
+mod treelets_climb;
+mod treelets_optimize;
 
 pub use cpu::WorkingTree;
 pub use dp::{solve_treelet, surface_area, CostModel, TreeletLeaf, TreeletSolution};
 pub use nodes_compact::NODES_COMPACT;
+pub use nodes_level::NODES_LEVEL;
 pub use nodes_mark::NODES_MARK;
-pub use treelet_optimize::TREELET_OPTIMIZE;
+pub use roots_bucket::ROOTS_BUCKET;
+pub use treelets_climb::TREELETS_CLIMB;
+pub use treelets_optimize::TREELETS_OPTIMIZE;
 
-pub use crate::gpu::constants::{MAX_GPU_LEAF_SIZE, MAX_TREELET_SIZE};
+pub use crate::gpu::constants::{MAX_GPU_LEAF_SIZE, MAX_LEVEL_DISPATCHES, MAX_TREELET_SIZE};
 
 use collapse::{Collapse, CollapseBuffers};
-use treelet_optimize::{Round, TreeletOptimize, TreeletState};
+use rounds::{Round, TreeletRounds, TreeletState, SCHEDULE_WORDS};
 
 use super::lbvh::{build_lbvh_from_boxes_cpu, prim_boxes_cpu, LbvhBuilder, LbvhInput, LBVH_PASSES};
 use super::presplit::{presplit_cpu, split_budget, PreSplitter};
@@ -31,8 +38,8 @@ use super::{Bvh, BvhNode, SahParams};
 use crate::device::{Geometry, Tree};
 use crate::geometry::Aabb;
 use crate::gpu::{
-    read_buffer, storage_buffer_zeroed, GpuContext, GpuTimer, ItemCount, ParamSlab, Recorder,
-    StageTime,
+    indirect_buffer_zeroed, read_buffer, storage_buffer_zeroed, GpuContext, GpuTimer, ItemCount,
+    ParamSlab, Recorder, StageTime,
 };
 use crate::scene::Triangle;
 use crate::{Error, Result};
@@ -189,7 +196,11 @@ struct Scratch {
     order: wgpu::Buffer,
     prim_counts: wgpu::Buffer,
     costs: wgpu::Buffer,
+    levels: wgpu::Buffer,
     arrivals: wgpu::Buffer,
+    schedule: wgpu::Buffer,
+    roots: wgpu::Buffer,
+    waves: wgpu::Buffer,
     flags: wgpu::Buffer,
     kept_scan: wgpu::Buffer,
     leaf_prim_scan: wgpu::Buffer,
@@ -208,7 +219,11 @@ impl Scratch {
             order: storage_buffer_zeroed(ctx, "treelet working order", u64::from(capacity) * 4)?,
             prim_counts: storage_buffer_zeroed(ctx, "treelet prim counts", nodes * 4)?,
             costs: storage_buffer_zeroed(ctx, "treelet costs", nodes * 4)?,
+            levels: storage_buffer_zeroed(ctx, "treelet levels", nodes * 4)?,
             arrivals: storage_buffer_zeroed(ctx, "treelet arrivals", u64::from(capacity) * 4)?,
+            schedule: indirect_buffer_zeroed(ctx, "treelet schedule", SCHEDULE_WORDS * 4)?,
+            roots: storage_buffer_zeroed(ctx, "treelet roots", u64::from(capacity) * 4)?,
+            waves: storage_buffer_zeroed(ctx, "treelet waves", u64::from(capacity) * 4)?,
             flags: storage_buffer_zeroed(ctx, "collapse flags", nodes * 4)?,
             kept_scan: storage_buffer_zeroed(ctx, "collapse kept scan", nodes * 4)?,
             leaf_prim_scan: storage_buffer_zeroed(ctx, "collapse leaf scan", nodes * 4)?,
@@ -229,7 +244,7 @@ pub struct TrbvhStages {
 pub struct TrbvhBuilder {
     lbvh: LbvhBuilder,
     presplit: Option<PreSplitter>,
-    optimizer: TreeletOptimize,
+    rounds: TreeletRounds,
     collapse: Collapse,
     scratch: Option<Scratch>,
     /// Leaves the last build's working tree had room for.
@@ -248,7 +263,7 @@ impl TrbvhBuilder {
         Ok(Self {
             lbvh: LbvhBuilder::new(ctx),
             presplit: None,
-            optimizer: TreeletOptimize::new(ctx),
+            rounds: TreeletRounds::new(ctx),
             collapse: Collapse::new(ctx)?,
             scratch: None,
             last_capacity: 0,
@@ -257,6 +272,13 @@ impl TrbvhBuilder {
             sah,
             params: ParamSlab::new(ctx),
         })
+    }
+
+    /// Overrides how many treelet levels each round gives a dispatch of their own (the rest are
+    /// climbed by one workgroup); None: chosen from the tree's size. Any value builds the same
+    /// tree (tests check 0, 1 and the most).
+    pub fn set_level_dispatches(&mut self, levels: Option<u32>) {
+        self.rounds.forced_level_dispatches = levels;
     }
 
     /// Timestamped passes one build records.
@@ -403,18 +425,23 @@ impl TrbvhBuilder {
             parents: self.lbvh.parents().expect("built"),
             prim_counts: &scratch.prim_counts,
             costs: &scratch.costs,
+            levels: &scratch.levels,
             arrivals: &scratch.arrivals,
+            schedule: &scratch.schedule,
+            roots: &scratch.roots,
+            waves: &scratch.waves,
         };
         let model = CostModel::from(&self.sah);
         for gamma in self.settings.gammas() {
             rec.encoder().clear_buffer(&scratch.arrivals, 0, None);
+            rec.encoder().clear_buffer(&scratch.schedule, 0, None);
             let mut pass = rec.pass("treelets");
             let round = Round {
                 model,
                 treelet_size: self.settings.treelet_size,
                 gamma,
             };
-            self.optimizer.record(&mut pass, count, &state, &round);
+            self.rounds.record(&mut pass, count, &state, &round);
         }
         let mut pass = rec.pass("collapse");
         let out = CollapseBuffers {

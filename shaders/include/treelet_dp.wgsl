@@ -1,0 +1,213 @@
+// One treelet's restructuring by one invocation (Karras & Aila 2013, §4; the paper spreads it over
+// a warp): many treelets of one level are optimized side by side, one per invocation, and every
+// invocation runs the same loops (the treelet size is uniform), so a SIMD or SIMT machine runs
+// them in lockstep without divergence.
+//   1. cost: the root's cost from its children, whose subtrees are final now;
+//   2. formation: start from the root's two children, then repeatedly expand the treelet leaf of
+//      largest surface area that is an internal node (first on ties), up to treelet_size leaves
+//      (always reached: a root has at least gamma >= treelet_size primitives);
+//   3. dynamic programming over the subsets S of the leaves in increasing order (a subset's proper
+//      subsets come first): c(S) = min(Ci·a(S) + min_P (c(P) + c(S\P)), Ct·a(S)·t(S)), each
+//      unordered partition once (P over the non-empty subsets of S without its lowest bit, in
+//      increasing order, the first of equal costs kept). The costs live in a private array (every
+//      invocation indexes it with the same S and P: side by side, SIMD lanes load side-by-side
+//      words); a(S) and t(S) come from the boxes and counts of S's two halves (leaves 0-3 and
+//      4-7), tabulated once per treelet;
+//   4. if the optimal cost is lower than the current one, the new topology is written back
+//      breadth-first (left child = the best P, right = S\P), reusing the treelet's internal
+//      nodes in formation order (the root keeps its index), with boxes, N, C and parent links.
+//      The best P of an internal subset is found again from the stored costs (the same search).
+// The CPU twin is `WorkingTree::optimize_treelet` (same operations in the same order; costs agree
+// to a few ulps where the GPU fuses Ci·a into the following add).
+// The including kernel declares `params: RoundParams` (treelet_round.wgsl), `nodes:
+// array<BvhNode>`, `parents: array<u32>`, `prim_counts: array<u32>`, `costs: array<f32>` (all
+// read_write storage).
+
+// Subsets 1 ..= 2^MAX_TREELET - 2 (the full set is never stored).
+const DP_SLOTS: u32 = (1u << MAX_TREELET) - 2u;
+
+var<private> dp_cost: array<f32, DP_SLOTS>;
+
+var<private> leaf_node: array<u32, MAX_TREELET>;
+var<private> leaf_min: array<vec3<f32>, MAX_TREELET>;
+var<private> leaf_max: array<vec3<f32>, MAX_TREELET>;
+var<private> leaf_prims: array<u32, MAX_TREELET>;
+var<private> internal_node: array<u32, MAX_TREELET>;
+
+fn node_area(node: u32) -> f32 {
+    return surface_area(nodes[node].min, nodes[node].max);
+}
+
+fn is_leaf_node(node: u32) -> bool {
+    return (nodes[node].right_or_count & LEAF_FLAG) != 0u;
+}
+
+fn subset_cost(s: u32) -> f32 {
+    return dp_cost[s - 1u];
+}
+
+// Boxes and primitive counts of the subsets of leaves 0-3 (`low_*[t]`, t < 16) and of leaves 4-7
+// (`high_*[t]`: leaves 4 + bits of t): a subset's box is the union of one entry of each.
+var<private> low_min: array<vec3<f32>, 16>;
+var<private> low_max: array<vec3<f32>, 16>;
+var<private> low_prims: array<u32, 16>;
+var<private> high_min: array<vec3<f32>, 16>;
+var<private> high_max: array<vec3<f32>, 16>;
+var<private> high_prims: array<u32, 16>;
+
+// Fills the half tables from the leaves (entry t extends entry t without its lowest bit).
+fn build_half_tables() {
+    low_min[0] = vec3<f32>(F32_MAX);
+    low_max[0] = vec3<f32>(-F32_MAX);
+    low_prims[0] = 0u;
+    high_min[0] = vec3<f32>(F32_MAX);
+    high_max[0] = vec3<f32>(-F32_MAX);
+    high_prims[0] = 0u;
+    for (var t = 1u; t < 16u; t++) {
+        let rest = t & (t - 1u);
+        let i = firstTrailingBit(t);
+        let j = min(i + 4u, MAX_TREELET - 1u);
+        low_min[t] = min(low_min[rest], leaf_min[i]);
+        low_max[t] = max(low_max[rest], leaf_max[i]);
+        low_prims[t] = low_prims[rest] + leaf_prims[i];
+        high_min[t] = min(high_min[rest], leaf_min[j]);
+        high_max[t] = max(high_max[rest], leaf_max[j]);
+        high_prims[t] = high_prims[rest] + leaf_prims[j];
+    }
+}
+
+fn subset_min(s: u32) -> vec3<f32> {
+    return min(low_min[s & 15u], high_min[s >> 4u]);
+}
+
+fn subset_max(s: u32) -> vec3<f32> {
+    return max(low_max[s & 15u], high_max[s >> 4u]);
+}
+
+fn subset_prims(s: u32) -> u32 {
+    return low_prims[s & 15u] + high_prims[s >> 4u];
+}
+
+// The best partition P of s (s has at least two leaves; the costs of its proper subsets are
+// stored) and its cost c(P) + c(S\P).
+fn best_partition(s: u32) -> vec2<u32> {
+    let delta = (s - 1u) & s;
+    var p = (0u - delta) & s;
+    var best = F32_MAX;
+    var best_p = 0u;
+    loop {
+        let c = subset_cost(p) + subset_cost(s ^ p);
+        if c < best {
+            best = c;
+            best_p = p;
+        }
+        p = (p - delta) & s;
+        if p == 0u {
+            break;
+        }
+    }
+    return vec2<u32>(best_p, bitcast<u32>(best));
+}
+
+// Step 2: the treelet below `root`, into the private leaf arrays.
+fn form_treelet(root: u32) {
+    leaf_node[0] = nodes[root].left_or_first;
+    leaf_node[1] = nodes[root].right_or_count;
+    internal_node[0] = root;
+    for (var count = 2u; count < params.treelet_size; count++) {
+        var best = 0u;
+        var best_area = -1.0;
+        for (var i = 0u; i < count; i++) {
+            let node = leaf_node[i];
+            if !is_leaf_node(node) {
+                let a = node_area(node);
+                if a > best_area {
+                    best_area = a;
+                    best = i;
+                }
+            }
+        }
+        let expanded = leaf_node[best];
+        leaf_node[best] = nodes[expanded].left_or_first;
+        leaf_node[count] = nodes[expanded].right_or_count;
+        internal_node[count - 1u] = expanded;
+    }
+    for (var i = 0u; i < MAX_TREELET; i++) {
+        if i < params.treelet_size {
+            let node = leaf_node[i];
+            leaf_min[i] = nodes[node].min;
+            leaf_max[i] = nodes[node].max;
+            leaf_prims[i] = prim_counts[node];
+        } else {
+            leaf_min[i] = vec3<f32>(F32_MAX);
+            leaf_max[i] = vec3<f32>(-F32_MAX);
+            leaf_prims[i] = 0u;
+        }
+    }
+    build_half_tables();
+}
+
+// Step 4: the new topology of the treelet below `root` from the DP's costs (`full_split`: the
+// full set's best partition, `full_cost`: its cost).
+fn write_back(root: u32, full_split: u32, full_cost: f32) {
+    let full = (1u << params.treelet_size) - 1u;
+    var queue_set: array<u32, MAX_TREELET>;
+    var queue_node: array<u32, MAX_TREELET>;
+    queue_set[0] = full;
+    queue_node[0] = root;
+    var queued = 1u;
+    for (var head = 0u; head < queued; head++) {
+        let s = queue_set[head];
+        let node = queue_node[head];
+        var split = full_split;
+        var cost = full_cost;
+        if s != full {
+            split = best_partition(s).x;
+            cost = subset_cost(s);
+        }
+        let parts = array<u32, 2>(split, s ^ split);
+        var child = array<u32, 2>(0u, 0u);
+        for (var k = 0u; k < 2u; k++) {
+            let part = parts[k];
+            if countOneBits(part) == 1u {
+                child[k] = leaf_node[firstTrailingBit(part)];
+            } else {
+                child[k] = internal_node[queued];
+                queue_set[queued] = part;
+                queue_node[queued] = child[k];
+                queued++;
+            }
+            parents[child[k]] = node;
+        }
+        nodes[node] = BvhNode(subset_min(s), child[0], subset_max(s), child[1]);
+        prim_counts[node] = subset_prims(s);
+        costs[node] = cost;
+    }
+}
+
+// Steps 1-4 for the treelet rooted at `root`.
+fn optimize_treelet(root: u32) {
+    let left = nodes[root].left_or_first;
+    let right = nodes[root].right_or_count;
+    let prims = prim_counts[root];
+    let current = combine_cost(node_area(root), prims, costs[left] + costs[right]);
+    costs[root] = current;
+    form_treelet(root);
+    let full = (1u << params.treelet_size) - 1u;
+    for (var s = 1u; s < full; s++) {
+        var c: f32;
+        if countOneBits(s) == 1u {
+            c = costs[leaf_node[firstTrailingBit(s)]];
+        } else {
+            let best = bitcast<f32>(best_partition(s).y);
+            c = combine_cost(surface_area(subset_min(s), subset_max(s)), subset_prims(s), best);
+        }
+        dp_cost[s - 1u] = c;
+    }
+    let best = best_partition(full);
+    let full_area = surface_area(subset_min(full), subset_max(full));
+    let full_cost = combine_cost(full_area, subset_prims(full), bitcast<f32>(best.y));
+    if full_cost < current {
+        write_back(root, best.x, full_cost);
+    }
+}

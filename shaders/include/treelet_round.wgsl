@@ -1,0 +1,58 @@
+// What the kernels of one treelet restructuring round share (Karras & Aila 2013, §3-4): their
+// parameters, the schedule buffer's layout, surface areas and the SAH cost of a node. Twins:
+// `RoundParams` (src/bvh/treelet/rounds.rs), `surface_area` and `CostModel::combine`
+// (src/bvh/treelet/dp.rs).
+
+#include "constants.wgsl"
+
+struct RoundParams {
+    // Leaves of the working tree (at most; see count_limit): it has 2n - 1 nodes.
+    count: u32,
+    row_pitch: u32,
+    // Nodes with at least gamma primitives root a treelet.
+    gamma: u32,
+    treelet_size: u32,
+    max_leaf_size: u32,
+    ci: f32,
+    ct: f32,
+    // Always 0 (see `unfused`).
+    zero: u32,
+    // Levels processed by one dispatch each (treelets_optimize); the levels above them are
+    // processed by treelets_climb.
+    level_dispatches: u32,
+    // The level a treelets_optimize dispatch processes (1 = treelets without treelets below).
+    level: u32,
+    pad0: u32,
+    pad1: u32,
+}
+
+// The schedule buffer (u32 words): per level L = 1 ..= MAX_LEVEL_DISPATCHES + 1, the number of
+// treelet roots at L (word L - 1) and a cursor for bucketing them (SCHEDULE_CURSORS + L - 1); then
+// the indirect dispatch arguments (x, y, z) of each level's treelets_optimize dispatch.
+const SCHEDULE_CURSORS: u32 = MAX_LEVEL_DISPATCHES + 1u;
+const SCHEDULE_ARGS: u32 = 2u * (MAX_LEVEL_DISPATCHES + 1u);
+
+const F32_MAX: f32 = 3.40282347e38;
+
+// XOR with a zero the compiler cannot see keeps a product from being fused into a following add
+// (FMA contraction, which GPU compilers do and WGSL allows). Used for surface areas only: the
+// collapse (nodes_mark.wgsl) recomputes a node's area to find the leaves the rounds chose
+// (Ct·A·N == C), so every kernel must round it identically.
+fn unfused(x: f32) -> f32 {
+    return bitcast<f32>(bitcast<u32>(x) ^ params.zero);
+}
+
+fn surface_area(lo: vec3<f32>, hi: vec3<f32>) -> f32 {
+    let e = hi - lo;
+    return 2.0 * (unfused(e.x * e.y) + unfused(e.y * e.z) + unfused(e.z * e.x));
+}
+
+// Cost of a node of area a and n primitives whose children cost `children` in total:
+// min(Ci·a + children, Ct·a·n where a leaf of n primitives is allowed).
+fn combine_cost(a: f32, n: u32, children: f32) -> f32 {
+    var c = params.ci * a + children;
+    if n <= params.max_leaf_size {
+        c = min(c, params.ct * a * f32(n));
+    }
+    return c;
+}

@@ -1,0 +1,100 @@
+// Treelet round, step 1 (Karras & Aila 2013, §4 "processing nodes bottom-up"): the schedule. A
+// bottom-up climb (one invocation per leaf, per-node arrival counters, the second arrival goes
+// on, as in bottom_up_climb.wgsl) gives every node its primitive count N and SAH cost
+//     C(n) = min(Ci·A(n) + C(left) + C(right),  Ct·A(n)·N(n) if N(n) <= max leaf size)
+// and its level: 0 below gamma primitives, else one more than the highest level of its children.
+// Nodes with N >= gamma root a treelet; two roots of one level are never ancestor and
+// descendant, so each level's treelets are disjoint and can be optimized at once, after the
+// levels below (treelets_optimize.wgsl, treelets_climb.wgsl). Costs of nodes below gamma are
+// final here; a root's cost is recomputed when its level is processed. The roots of each level
+// up to level_dispatches + 1 are counted in the schedule buffer (treelet_round.wgsl).
+// Node boxes and children were written by earlier dispatches (plain loads); the counts, costs and
+// levels this climb writes are shared across workgroups, so they go through atomics, ordered
+// around the counter increments by storageBarriers.
+#include "bvh_node.wgsl"
+#include "treelet_round.wgsl"
+
+const WORKGROUP: u32 = 64u;
+
+@group(0) @binding(0) var<uniform> params: RoundParams;
+@group(0) @binding(1) var<storage, read> nodes: array<BvhNode>;
+@group(0) @binding(2) var<storage, read> parents: array<u32>;
+@group(0) @binding(3) var<storage, read_write> prim_counts: array<atomic<u32>>;
+@group(0) @binding(4) var<storage, read_write> costs: array<atomic<u32>>;
+@group(0) @binding(5) var<storage, read_write> levels: array<atomic<u32>>;
+@group(0) @binding(6) var<storage, read_write> arrivals: array<atomic<u32>>;
+@group(0) @binding(7) var<storage, read_write> schedule: array<atomic<u32>>;
+// The item count's limit (`gpu::ItemCount`): the tree has min(params.count, count_limit[0]) leaves.
+@group(0) @binding(8) var<storage, read> count_limit: array<u32>;
+
+var<workgroup> climbing: atomic<u32>;
+var<workgroup> any_climbing: u32;
+
+fn node_area(node: u32) -> f32 {
+    return surface_area(nodes[node].min, nodes[node].max);
+}
+
+@compute @workgroup_size(WORKGROUP)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let j = gid.x + gid.y * params.row_pitch;
+    let n = min(params.count, count_limit[0]);
+    var node = n - 1u + j;
+    if lid == 0u {
+        atomicStore(&climbing, 0u);
+    }
+    workgroupBarrier();
+    var is_climbing = false;
+    if j < n {
+        atomicStore(&prim_counts[node], 1u);
+        atomicStore(&costs[node], bitcast<u32>(params.ct * node_area(node)));
+        atomicStore(&levels[node], 0u);
+        is_climbing = node != 0u;
+        if is_climbing {
+            atomicAdd(&climbing, 1u);
+        }
+    }
+    loop {
+        // Release: this node's count, cost and level are stored before the parent's counter is
+        // incremented.
+        storageBarrier();
+        if is_climbing {
+            let parent = parents[node];
+            if atomicAdd(&arrivals[parent], 1u) == 0u {
+                // First arrival: the sibling's invocation will finish the parent.
+                is_climbing = false;
+                atomicSub(&climbing, 1u);
+            } else {
+                node = parent;
+            }
+        }
+        // Acquire: the sibling's data, stored before its increment, is visible now.
+        storageBarrier();
+        if is_climbing {
+            let left = nodes[node].left_or_first;
+            let right = nodes[node].right_or_count;
+            let prims = atomicLoad(&prim_counts[left]) + atomicLoad(&prim_counts[right]);
+            let children = bitcast<f32>(atomicLoad(&costs[left])) + bitcast<f32>(atomicLoad(&costs[right]));
+            atomicStore(&prim_counts[node], prims);
+            atomicStore(&costs[node], bitcast<u32>(combine_cost(node_area(node), prims, children)));
+            var level = 0u;
+            if prims >= params.gamma {
+                level = max(atomicLoad(&levels[left]), atomicLoad(&levels[right])) + 1u;
+                if level <= params.level_dispatches + 1u {
+                    atomicAdd(&schedule[level - 1u], 1u);
+                }
+            }
+            atomicStore(&levels[node], level);
+            if node == 0u {
+                is_climbing = false;
+                atomicSub(&climbing, 1u);
+            }
+        }
+        workgroupBarrier();
+        if lid == 0u {
+            any_climbing = atomicLoad(&climbing);
+        }
+        if workgroupUniformLoad(&any_climbing) == 0u {
+            break;
+        }
+    }
+}

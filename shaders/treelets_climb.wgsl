@@ -1,0 +1,83 @@
+// Treelet round, step 4: the levels above level_dispatches, in one workgroup (a few treelets per
+// level near the top of a tree: one dispatch each would mostly cost dispatch overhead). It starts
+// from the roots of level level_dispatches + 1 (bucketed by roots_bucket.wgsl) and climbs: after
+// each wave of treelets (one per invocation, treelet_dp.wgsl; more waves when a level has more
+// roots than the workgroup has invocations) a root's parent joins the next wave once its other
+// child is done: at once when that child was processed before this kernel (level <=
+// level_dispatches) or is no root, else at the second arrival. Works for trees of any height.
+// Node data is only shared within the workgroup: storageBarriers order it.
+#include "bvh_node.wgsl"
+#include "treelet_round.wgsl"
+
+const WORKGROUP: u32 = 32u;
+
+@group(0) @binding(0) var<uniform> params: RoundParams;
+@group(0) @binding(1) var<storage, read_write> nodes: array<BvhNode>;
+@group(0) @binding(2) var<storage, read_write> parents: array<u32>;
+@group(0) @binding(3) var<storage, read_write> prim_counts: array<u32>;
+@group(0) @binding(4) var<storage, read_write> costs: array<f32>;
+@group(0) @binding(5) var<storage, read> schedule: array<u32>;
+@group(0) @binding(6) var<storage, read> roots: array<u32>;
+@group(0) @binding(7) var<storage, read> levels: array<u32>;
+// Arrival counters of the internal nodes, zeroed by roots_bucket.wgsl.
+@group(0) @binding(8) var<storage, read_write> arrivals: array<atomic<u32>>;
+// Two halves of `half` entries each: the current wave and the next.
+@group(0) @binding(9) var<storage, read_write> waves: array<u32>;
+
+#include "treelet_dp.wgsl"
+
+var<workgroup> wave_size: u32;
+var<workgroup> next_size: atomic<u32>;
+
+@compute @workgroup_size(WORKGROUP)
+fn main(@builtin(local_invocation_index) lid: u32) {
+    let top = params.level_dispatches + 1u;
+    let half = arrayLength(&waves) / 2u;
+    var first = 0u;
+    for (var below = 1u; below < top; below++) {
+        first += schedule[below - 1u];
+    }
+    let start = schedule[top - 1u];
+    for (var i = lid; i < start; i += WORKGROUP) {
+        waves[i] = roots[first + i];
+    }
+    if lid == 0u {
+        wave_size = start;
+    }
+    var current = 0u;
+    loop {
+        storageBarrier();
+        let size = workgroupUniformLoad(&wave_size);
+        if size == 0u {
+            break;
+        }
+        let wave = current * half;
+        let next = (1u - current) * half;
+        for (var i = lid; i < size; i += WORKGROUP) {
+            optimize_treelet(waves[wave + i]);
+        }
+        if lid == 0u {
+            atomicStore(&next_size, 0u);
+        }
+        // This wave's node data is stored before the next wave reads it.
+        storageBarrier();
+        workgroupBarrier();
+        for (var i = lid; i < size; i += WORKGROUP) {
+            let root = waves[wave + i];
+            if root != 0u {
+                let parent = parents[root];
+                let left = nodes[parent].left_or_first;
+                let sibling = select(left, nodes[parent].right_or_count, left == root);
+                let waits = levels[sibling] >= top;
+                if !waits || atomicAdd(&arrivals[parent], 1u) == 1u {
+                    waves[next + atomicAdd(&next_size, 1u)] = parent;
+                }
+            }
+        }
+        workgroupBarrier();
+        if lid == 0u {
+            wave_size = atomicLoad(&next_size);
+        }
+        current = 1u - current;
+    }
+}

@@ -1,0 +1,8 @@
+//! Treelet round step 1 (kernel `nodes_level`; Karras & Aila 2013, §4): primitive counts, SAH
+//! costs and treelet levels bottom-up, and the roots counted per level.
+
+use super::rounds::RoundParams;
+use crate::gpu::kernel;
+
+kernel!(pub NODES_LEVEL: RoundParams = "nodes_level"::"main", [64, 1, 1],
+    [Read, Read, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, Read]);

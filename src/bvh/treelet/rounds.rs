@@ -1,0 +1,186 @@
+//! GPU treelet restructuring rounds (Karras & Aila 2013, §3-4), processed level by level. A round
+//! schedules the tree (kernel `nodes_level`: counts, costs and each treelet root's level, a
+//! bottom-up climb), buckets the roots by level (`roots_bucket`), optimizes each of the lowest
+//! levels in one indirect dispatch, one treelet per invocation (`treelets_optimize`), and climbs
+//! the remaining top levels in one workgroup (`treelets_climb`). Roots of one level are disjoint
+//! subtrees, and every level is processed after the levels below it, so the result is the one of
+//! the paper's bottom-up traversal: the CPU twin `WorkingTree::optimize_round` processes the nodes
+//! in post-order. Dispatch boundaries order memory, so the treelet kernels read and write node data
+//! with plain loads and stores, not atomics.
+
+use bytemuck::{Pod, Zeroable};
+
+use super::dp::CostModel;
+use super::nodes_level::NODES_LEVEL;
+use super::roots_bucket::ROOTS_BUCKET;
+use super::treelets_climb::TREELETS_CLIMB;
+use super::treelets_optimize::TREELETS_OPTIMIZE;
+use crate::gpu::constants::MAX_LEVEL_DISPATCHES;
+use crate::gpu::{Grid, ItemCount, Kernel, Pass};
+
+/// Parameters of every kernel of a round (WGSL twin in `shaders/include/treelet_round.wgsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+pub struct RoundParams {
+    count: u32,
+    row_pitch: u32,
+    gamma: u32,
+    treelet_size: u32,
+    max_leaf_size: u32,
+    ci: f32,
+    ct: f32,
+    /// Always 0: keeps the kernels' area products unfused (see `unfused` in the shaders).
+    zero: u32,
+    level_dispatches: u32,
+    level: u32,
+    _pad: [u32; 2],
+}
+const _: () = assert!(std::mem::size_of::<RoundParams>() == 48);
+
+/// Words of the schedule buffer: roots and cursors per level (levels 1 ..= MAX_LEVEL_DISPATCHES
+/// + 1), then the indirect arguments (x, y, z) of each dispatched level.
+pub(crate) const SCHEDULE_WORDS: u64 =
+    2 * (MAX_LEVEL_DISPATCHES as u64 + 1) + 3 * MAX_LEVEL_DISPATCHES as u64;
+/// First word of the indirect arguments in the schedule buffer.
+const SCHEDULE_ARGS: u64 = 2 * (MAX_LEVEL_DISPATCHES as u64 + 1);
+
+/// Per-node state the rounds and the collapse share (sized for n leaves, 2n-1 nodes).
+pub(crate) struct TreeletState<'a> {
+    pub nodes: &'a wgpu::Buffer,
+    pub parents: &'a wgpu::Buffer,
+    pub prim_counts: &'a wgpu::Buffer,
+    pub costs: &'a wgpu::Buffer,
+    /// Treelet level of each node (0: no treelet root).
+    pub levels: &'a wgpu::Buffer,
+    /// Arrival counters of the internal nodes (n words), zeroed before each round.
+    pub arrivals: &'a wgpu::Buffer,
+    /// `SCHEDULE_WORDS` words (storage and indirect), zeroed before each round.
+    pub schedule: &'a wgpu::Buffer,
+    /// The roots of the dispatched levels and the first climbed one (n words).
+    pub roots: &'a wgpu::Buffer,
+    /// The climb's two waves (n words).
+    pub waves: &'a wgpu::Buffer,
+}
+
+/// What one round does: the cost model, the treelet size and γ (the smallest treelet root).
+pub(crate) struct Round {
+    pub model: CostModel,
+    pub treelet_size: u32,
+    pub gamma: u32,
+}
+
+/// Levels a round of `n` leaves and smallest root `gamma` gives a dispatch each: about as many as
+/// have more roots than the climbing workgroup has invocations (level L of a balanced tree has
+/// about n / (γ·2^L) roots), plus two for unbalanced trees.
+pub(crate) fn level_dispatches(n: u32, gamma: u32) -> u32 {
+    let workgroup = TREELETS_CLIMB.info.workgroup_size[0];
+    let wide = (n / gamma.max(1) / workgroup).max(1);
+    (wide.ilog2() + 2).min(MAX_LEVEL_DISPATCHES)
+}
+
+/// The kernels of a round.
+pub(crate) struct TreeletRounds {
+    level: Kernel<RoundParams>,
+    bucket: Kernel<RoundParams>,
+    optimize: Kernel<RoundParams>,
+    climb: Kernel<RoundParams>,
+    /// Levels dispatched per round; None: `level_dispatches` (tests force other values).
+    pub forced_level_dispatches: Option<u32>,
+}
+
+impl TreeletRounds {
+    pub fn new(ctx: &crate::gpu::GpuContext) -> Self {
+        Self {
+            level: Kernel::new(ctx, &NODES_LEVEL),
+            bucket: Kernel::new(ctx, &ROOTS_BUCKET),
+            optimize: Kernel::new(ctx, &TREELETS_OPTIMIZE),
+            climb: Kernel::new(ctx, &TREELETS_CLIMB),
+            forced_level_dispatches: None,
+        }
+    }
+
+    /// Records one round over a working tree of `count` leaves (LBVH layout) whose arrival
+    /// counters and schedule are zero. `gamma = u32::MAX` only updates counts and costs.
+    pub fn record(
+        &self,
+        pass: &mut Pass<'_>,
+        count: ItemCount<'_>,
+        state: &TreeletState<'_>,
+        round: &Round,
+    ) {
+        let ctx = pass.ctx();
+        let n = count.capacity();
+        let dispatched = self
+            .forced_level_dispatches
+            .unwrap_or_else(|| level_dispatches(n, round.gamma))
+            .min(MAX_LEVEL_DISPATCHES);
+        let grid = self.level.grid(ctx, n);
+        let mut params = RoundParams {
+            count: n,
+            row_pitch: grid.row_pitch,
+            gamma: round.gamma,
+            treelet_size: round.treelet_size,
+            max_leaf_size: round.model.max_leaf_size,
+            ci: round.model.ci,
+            ct: round.model.ct,
+            zero: 0,
+            level_dispatches: dispatched,
+            level: 0,
+            _pad: [0; 2],
+        };
+        let limit = count.limit(ctx);
+        pass.dispatch(
+            &self.level,
+            grid,
+            &params,
+            &[
+                state.nodes,
+                state.parents,
+                state.prim_counts,
+                state.costs,
+                state.levels,
+                state.arrivals,
+                state.schedule,
+                limit,
+            ],
+        );
+        if round.gamma == u32::MAX {
+            return;
+        }
+        pass.dispatch(
+            &self.bucket,
+            grid,
+            &params,
+            &[
+                state.prim_counts,
+                state.levels,
+                state.arrivals,
+                state.schedule,
+                state.roots,
+                limit,
+            ],
+        );
+        let treelet_buffers = [
+            state.nodes,
+            state.parents,
+            state.prim_counts,
+            state.costs,
+            state.schedule,
+            state.roots,
+        ];
+        for level in 1..=dispatched {
+            params.level = level;
+            let args = 4 * (SCHEDULE_ARGS + 3 * u64::from(level - 1));
+            pass.dispatch_indirect(
+                &self.optimize,
+                state.schedule,
+                args,
+                &params,
+                &treelet_buffers,
+            );
+        }
+        let mut climb_buffers = treelet_buffers.to_vec();
+        climb_buffers.extend([state.levels, state.arrivals, state.waves]);
+        pass.dispatch(&self.climb, Grid::workgroups(1, 1), &params, &climb_buffers);
+    }
+}

@@ -1,0 +1,8 @@
+//! Treelet round step 3 (kernel `treelets_optimize`; Karras & Aila 2013, §4): the treelets of one
+//! level, one invocation each.
+
+use super::rounds::RoundParams;
+use crate::gpu::kernel;
+
+kernel!(pub TREELETS_OPTIMIZE: RoundParams = "treelets_optimize"::"main", [32, 1, 1],
+    [ReadWrite, ReadWrite, ReadWrite, ReadWrite, Read, Read]);
