@@ -8,6 +8,10 @@
 // levels below (treelets_optimize.wgsl, treelets_climb.wgsl). Costs of nodes below gamma are
 // final here; a root's cost is recomputed when its level is processed. The roots of each level
 // up to level_dispatches + 1 are counted in the schedule buffer (treelet_round.wgsl).
+// After the first round (levels_only), counts and costs are already those of the tree, and only
+// the roots (ancestors of roots are roots) need new levels: the climb starts at the roots whose
+// children are no roots (level 1; one invocation per internal node) and waits at a parent only
+// when the sibling is a root, climbing too; other internal nodes get level 0.
 // Node boxes and children were written by earlier dispatches (plain loads); the counts, costs and
 // levels this climb writes are shared across workgroups, so they go through atomics, ordered
 // around the counter increments by storageBarriers.
@@ -34,6 +38,15 @@ fn node_area(node: u32) -> f32 {
     return surface_area(nodes[node].min, nodes[node].max);
 }
 
+fn is_root(node: u32) -> bool {
+    return atomicLoad(&prim_counts[node]) >= params.gamma;
+}
+
+// The level a parent takes from `child` (0: no root).
+fn child_level(child: u32) -> u32 {
+    return select(0u, atomicLoad(&levels[child]), is_root(child));
+}
+
 @compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let j = gid.x + gid.y * params.row_pitch;
@@ -44,7 +57,23 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
     }
     workgroupBarrier();
     var is_climbing = false;
-    if j < n {
+    if params.levels_only != 0u {
+        // Invocation j: internal node j.
+        node = j;
+        if j + 1u < n {
+            if !is_root(j) {
+                atomicStore(&levels[j], 0u);
+            } else if !is_root(nodes[j].left_or_first) && !is_root(nodes[j].right_or_count) {
+                // Level 1 is always counted (level_dispatches + 1 >= 1).
+                atomicStore(&levels[j], 1u);
+                atomicAdd(&schedule[0], 1u);
+                is_climbing = j != 0u;
+                if is_climbing {
+                    atomicAdd(&climbing, 1u);
+                }
+            }
+        }
+    } else if j < n {
         atomicStore(&prim_counts[node], 1u);
         atomicStore(&costs[node], bitcast<u32>(params.ct * node_area(node)));
         atomicStore(&levels[node], 0u);
@@ -59,7 +88,10 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
         storageBarrier();
         if is_climbing {
             let parent = parents[node];
-            if atomicAdd(&arrivals[parent], 1u) == 0u {
+            let left = nodes[parent].left_or_first;
+            let sibling = select(left, nodes[parent].right_or_count, left == node);
+            let waits = params.levels_only == 0u || is_root(sibling);
+            if waits && atomicAdd(&arrivals[parent], 1u) == 0u {
                 // First arrival: the sibling's invocation will finish the parent.
                 is_climbing = false;
                 atomicSub(&climbing, 1u);
@@ -72,13 +104,15 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
         if is_climbing {
             let left = nodes[node].left_or_first;
             let right = nodes[node].right_or_count;
-            let prims = atomicLoad(&prim_counts[left]) + atomicLoad(&prim_counts[right]);
-            let children = bitcast<f32>(atomicLoad(&costs[left])) + bitcast<f32>(atomicLoad(&costs[right]));
-            atomicStore(&prim_counts[node], prims);
-            atomicStore(&costs[node], bitcast<u32>(combine_cost(node_area(node), prims, children)));
+            if params.levels_only == 0u {
+                let prims = atomicLoad(&prim_counts[left]) + atomicLoad(&prim_counts[right]);
+                let children = bitcast<f32>(atomicLoad(&costs[left])) + bitcast<f32>(atomicLoad(&costs[right]));
+                atomicStore(&prim_counts[node], prims);
+                atomicStore(&costs[node], bitcast<u32>(combine_cost(node_area(node), prims, children)));
+            }
             var level = 0u;
-            if prims >= params.gamma {
-                level = max(atomicLoad(&levels[left]), atomicLoad(&levels[right])) + 1u;
+            if is_root(node) {
+                level = max(child_level(left), child_level(right)) + 1u;
                 if level <= params.level_dispatches + 1u {
                     atomicAdd(&schedule[level - 1u], 1u);
                 }

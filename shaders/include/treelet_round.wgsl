@@ -22,8 +22,10 @@ struct RoundParams {
     level_dispatches: u32,
     // The level a treelets_optimize dispatch processes (1 = treelets without treelets below).
     level: u32,
+    // 1 after the first round: counts and costs are still those of the tree (the treelet kernels
+    // rewrite both consistently), so nodes_level only gives the roots of the new gamma levels.
+    levels_only: u32,
     pad0: u32,
-    pad1: u32,
 }
 
 // The schedule buffer (u32 words): per level L = 1 ..= MAX_LEVEL_DISPATCHES + 1, the number of

@@ -432,7 +432,7 @@ impl TrbvhBuilder {
             waves: &scratch.waves,
         };
         let model = CostModel::from(&self.sah);
-        for gamma in self.settings.gammas() {
+        for (r, gamma) in self.settings.gammas().into_iter().enumerate() {
             rec.encoder().clear_buffer(&scratch.arrivals, 0, None);
             rec.encoder().clear_buffer(&scratch.schedule, 0, None);
             let mut pass = rec.pass("treelets");
@@ -440,6 +440,7 @@ impl TrbvhBuilder {
                 model,
                 treelet_size: self.settings.treelet_size,
                 gamma,
+                levels_only: r > 0,
             };
             self.rounds.record(&mut pass, count, &state, &round);
         }

@@ -33,7 +33,8 @@ pub struct RoundParams {
     zero: u32,
     level_dispatches: u32,
     level: u32,
-    _pad: [u32; 2],
+    levels_only: u32,
+    _pad: u32,
 }
 const _: () = assert!(std::mem::size_of::<RoundParams>() == 48);
 
@@ -67,6 +68,9 @@ pub(crate) struct Round {
     pub model: CostModel,
     pub treelet_size: u32,
     pub gamma: u32,
+    /// The counts and costs are those of the tree (a round ran before): only the treelet
+    /// roots' levels are computed, by a climb over the roots alone.
+    pub levels_only: bool,
 }
 
 /// Levels a round of `n` leaves and smallest root `gamma` gives a dispatch each: about as many as
@@ -114,6 +118,7 @@ impl TreeletRounds {
             .forced_level_dispatches
             .unwrap_or_else(|| level_dispatches(n, round.gamma))
             .min(MAX_LEVEL_DISPATCHES);
+        // One invocation per leaf, or per internal node when only levels are computed.
         let grid = self.level.grid(ctx, n);
         let mut params = RoundParams {
             count: n,
@@ -126,7 +131,8 @@ impl TreeletRounds {
             zero: 0,
             level_dispatches: dispatched,
             level: 0,
-            _pad: [0; 2],
+            levels_only: u32::from(round.levels_only),
+            _pad: 0,
         };
         let limit = count.limit(ctx);
         pass.dispatch(
