@@ -57,7 +57,7 @@ fn render(scene: &Scene) -> (image::RgbaImage, u64) {
         width: SIZE,
         height: SIZE,
         max_depth: 1,
-        exposure: 1.0,
+        ..RenderSettings::default()
     };
     let mut tracer = PathTracer::new(gpu(), settings).unwrap();
     let stats = tracer

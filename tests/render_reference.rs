@@ -6,7 +6,8 @@
 
 mod common;
 
-use common::gpu;
+use common::{convert_wide, gpu};
+use treelet::bvh::wide::Layout;
 use treelet::bvh::{build_sweep_sah, SahParams};
 use treelet::device::{Geometry, Tree};
 use treelet::scene::{load_scene, Material, Scene};
@@ -19,15 +20,19 @@ use treelet::trace::{PathTracer, RenderSettings};
 const TOLERANCE: f64 = 0.05;
 const BLOCK: u32 = 4;
 
-fn render(scene: &Scene) -> image::RgbaImage {
+fn render(scene: &Scene, layout: Layout) -> image::RgbaImage {
     let bvh = build_sweep_sah(&scene.triangles, &SahParams::default());
     let geometry = Geometry::upload(gpu(), scene).unwrap();
-    let tree = Tree::upload(gpu(), &bvh).unwrap();
+    let mut tree = Tree::upload(gpu(), &bvh).unwrap();
+    if layout == Layout::Wide {
+        convert_wide(&mut tree);
+    }
     let settings = RenderSettings {
         width: 96,
         height: 96,
         max_depth: 4,
         exposure: 1.0,
+        layout,
     };
     let mut tracer = PathTracer::new(gpu(), settings).unwrap();
     tracer
@@ -66,7 +71,7 @@ fn reference_path() -> std::path::PathBuf {
 #[test]
 fn cornell_matches_reference() {
     let scene = load_scene("cornell").unwrap();
-    let image = render(&scene);
+    let image = render(&scene, Layout::Binary);
     if std::env::var_os("TREELET_UPDATE_REFERENCE").is_some() {
         image.save(reference_path()).unwrap();
     }
@@ -87,11 +92,32 @@ fn wrong_render_fails_the_reference() {
             *m = Material::diffuse(glam::Vec3::new(0.1, 0.1, 0.8));
         }
     }
-    let image = render(&scene);
+    let image = render(&scene, Layout::Binary);
     let reference = image::open(reference_path())
         .expect("reference image")
         .to_rgba8();
     let err = mean_abs_error(&image, &reference);
     println!("wrong render MAE: {err:.5}");
     assert!(err > TOLERANCE, "a wrong render passed with MAE {err}");
+}
+
+/// The wide layout traces the same image: within the tolerance of the reference, and nearly
+/// pixel-identical to the binary layout's (the same paths hit the same triangles; only rays
+/// through shared edges may pick the other, equally close triangle).
+#[test]
+fn wide_layout_renders_the_reference() {
+    let scene = load_scene("cornell").unwrap();
+    let wide = render(&scene, Layout::Wide);
+    let binary = render(&scene, Layout::Binary);
+    let reference = image::open(reference_path())
+        .expect("reference image")
+        .to_rgba8();
+    let err = mean_abs_error(&wide, &reference);
+    let to_binary = mean_abs_error(&wide, &binary);
+    println!("cornell wide: MAE {err:.5} vs reference, {to_binary:.5} vs binary");
+    assert!(err <= TOLERANCE, "MAE {err} exceeds {TOLERANCE}");
+    assert!(
+        to_binary <= 0.002,
+        "wide differs from binary by {to_binary}"
+    );
 }

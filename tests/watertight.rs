@@ -11,13 +11,14 @@ mod common;
 use common::{assert_hits_equal, cpu_traversal_hits, gpu, oracle_hits, rng};
 use glam::{Quat, Vec3};
 use rand::Rng;
+use treelet::bvh::wide::Layout;
 use treelet::bvh::{validate_with_references, Builder, SahParams, TreeUpdater, UpdateMode};
 use treelet::device::{Geometry, Tree};
 use treelet::geometry::{Hit, Ray};
 use treelet::gpu::Timing;
 use treelet::gpu::{ParamSlab, Recorder};
 use treelet::scene::{Scene, Triangle};
-use treelet::trace::{any_hits, closest_hits};
+use treelet::trace::{any_hits, any_hits_wide, closest_hits, closest_hits_wide};
 
 /// A closed indexed mesh: shared vertices are one entry, so neighbours see bit-identical
 /// coordinates after any transform.
@@ -314,8 +315,8 @@ fn brute_force_never_escapes() {
     }
 }
 
-/// Every builder's tree, traced on the GPU (closest hit and any hit) and on the CPU: no ray
-/// escapes, and the closest hits equal brute force.
+/// Every builder's tree, traced on the GPU (closest hit and any hit, binary and wide layout) and
+/// on the CPU: no ray escapes, and the closest hits equal brute force.
 #[test]
 fn no_builder_lets_a_ray_escape() {
     let params = SahParams::default();
@@ -332,6 +333,7 @@ fn no_builder_lets_a_ray_escape() {
         let who = builder.label();
         // Builders compile their pipelines once and rebuild per mesh, as per frame.
         let mut updater = TreeUpdater::new(gpu(), UpdateMode::Rebuild(builder), &params).unwrap();
+        updater.set_layout(gpu(), Layout::Wide);
         for (mesh, scene, rays, oracle) in &cases {
             let geometry = Geometry::upload(gpu(), scene).unwrap();
             let mut tree = Tree::empty(gpu()).unwrap();
@@ -349,6 +351,9 @@ fn no_builder_lets_a_ray_escape() {
             let t_of = |h: &[Hit], i: usize| h[i].is_hit().then_some(h[i].t);
             assert_no_escape(mesh, rays, |i| t_of(&hits, i), &format!("GPU {who}"));
             assert_hits_equal(&scene.triangles, rays, oracle, &hits);
+            let wide = closest_hits_wide(gpu(), &geometry, &tree, &plain).unwrap();
+            assert_no_escape(mesh, rays, |i| t_of(&wide, i), &format!("GPU wide {who}"));
+            assert_hits_equal(&scene.triangles, rays, oracle, &wide);
             let cpu = cpu_traversal_hits(&bvh, &scene.triangles, rays);
             assert_no_escape(mesh, rays, |i| t_of(&cpu, i), &format!("CPU {who}"));
             assert_hits_equal(&scene.triangles, rays, oracle, &cpu);
@@ -362,6 +367,13 @@ fn no_builder_lets_a_ray_escape() {
                 .collect();
             let any = any_hits(gpu(), &geometry, &tree, &shadow).unwrap();
             assert_no_escape(mesh, rays, |i| t_of(&any, i), &format!("GPU any-hit {who}"));
+            let any_wide = any_hits_wide(gpu(), &geometry, &tree, &shadow).unwrap();
+            assert_no_escape(
+                mesh,
+                rays,
+                |i| t_of(&any_wide, i),
+                &format!("GPU wide any-hit {who}"),
+            );
             let cpu_any: Vec<Hit> = shadow
                 .iter()
                 .map(|r| bvh.any_hit(&scene.triangles, r))
@@ -383,11 +395,21 @@ fn any_hit_respects_the_interval() {
     let scene = scene_of(&mesh);
     let short: Vec<Ray> = mesh.rays(0.9).into_iter().map(|(_, r)| r).collect();
     let (geometry, tree, _) = Builder::Lbvh
-        .build(gpu(), &scene, &SahParams::default(), &Timing::quick(1))
+        .build(
+            gpu(),
+            &scene,
+            &SahParams::default(),
+            &Timing::quick(1),
+            Layout::Wide,
+        )
         .unwrap();
-    let any = any_hits(gpu(), &geometry, &tree, &short).unwrap();
-    assert!(
-        any.iter().all(|h| !h.is_hit()),
-        "a hit inside an empty sphere"
-    );
+    for any in [
+        any_hits(gpu(), &geometry, &tree, &short).unwrap(),
+        any_hits_wide(gpu(), &geometry, &tree, &short).unwrap(),
+    ] {
+        assert!(
+            any.iter().all(|h| !h.is_hit()),
+            "a hit inside an empty sphere"
+        );
+    }
 }

@@ -1,11 +1,12 @@
 //! A frame's statistics read back without waiting: the timestamps of its passes (animate, build
-//! stages, trace), the tracer's ray counters and the tree's node and reference counts are copied
-//! into a staging buffer at the end of the frame's recording and reach the panel a frame or two
-//! later, once the GPU is done. A few slots rotate; when all are still in flight (the GPU is
-//! behind), a frame records without statistics.
+//! stages, trace), the tracer's ray counters and the tree's node and reference counts (and the
+//! wide tree's, when the update converted it) are copied into a staging buffer at the end of the
+//! frame's recording and reach the panel a frame or two later, once the GPU is done. A few slots
+//! rotate; when all are still in flight (the GPU is behind), a frame records without statistics.
 
 use super::animated_scene::COMPANION_PREFIX;
 use super::stats::BuildTiming;
+use crate::device::Tree;
 use crate::gpu::{GpuContext, GpuTimer, Readback, Recorder, StageTime};
 use crate::trace::{RecordedTrace, TraceStats};
 
@@ -13,11 +14,14 @@ use crate::trace::{RecordedTrace, TraceStats};
 const SLOTS: usize = 3;
 /// Passes one frame records at most (animate, the build's stages, trace, tonemap).
 const MAX_PASSES: u32 = 32;
-/// Staging layout: timestamps, then trace counters, then tree counts.
+/// Staging layout: timestamps, then trace counters, then tree counts, then the wide tree's
+/// counters (nodes, references, capacity overflows).
 const TICKS_BYTES: u64 = MAX_PASSES as u64 * 16;
 const COUNTERS_BYTES: u64 = 64 * 8;
 const TREE_COUNTS_AT: u64 = TICKS_BYTES + COUNTERS_BYTES;
-const STAGING_BYTES: u64 = TREE_COUNTS_AT + 8;
+const WIDE_COUNTS_AT: u64 = TREE_COUNTS_AT + 8;
+const WIDE_COUNTS_BYTES: u64 = 12;
+const STAGING_BYTES: u64 = WIDE_COUNTS_AT + WIDE_COUNTS_BYTES;
 
 /// What a frame recorded, to interpret its readback.
 #[derive(Clone, Debug, Default)]
@@ -32,6 +36,8 @@ pub struct FrameRecord {
     pub trace: Option<RecordedTrace>,
     /// Wall-clock time of recording the frame (the trace's fallback without timestamps).
     pub wall_ms: f64,
+    /// The tree had a wide layout after the frame (its counters were copied; set by `record`).
+    pub wide: bool,
 }
 
 /// What a frame's readback says.
@@ -44,6 +50,10 @@ pub struct FrameResult {
     pub trace: Option<TraceStats>,
     /// (nodes, references) of the tree after the frame.
     pub tree_counts: (u32, u32),
+    /// (wide nodes, references) of its wide layout, when the frame's tree had one.
+    pub wide_counts: Option<(u32, u32)>,
+    /// The wide conversion ran out of nodes (a bug: its capacity bounds every binary tree).
+    pub wide_overflowed: bool,
     /// Paths that overflowed the traversal stack.
     pub overflows: u64,
 }
@@ -87,13 +97,14 @@ impl FrameReadback {
         self.slots[free].timer.take()
     }
 
-    /// At the end of the frame's recording: resolves its timer and copies the statistics.
+    /// At the end of the frame's recording: resolves its timer and copies the statistics (the
+    /// counts of `tree` and of its wide layout, if it has one).
     pub fn record(
         &mut self,
         rec: &mut Recorder<'_>,
         counters: Option<&wgpu::Buffer>,
-        tree_counts: &wgpu::Buffer,
-        record: FrameRecord,
+        tree: &Tree,
+        mut record: FrameRecord,
     ) {
         let Some(index) = self.recording else {
             return;
@@ -117,7 +128,12 @@ impl FrameReadback {
                 u64::from(trace.dispatches) * 8,
             );
         }
-        slot.readback.copy(encoder, tree_counts, TREE_COUNTS_AT, 8);
+        slot.readback.copy(encoder, &tree.counts, TREE_COUNTS_AT, 8);
+        if let Some(wide) = &tree.wide {
+            slot.readback
+                .copy(encoder, &wide.counters, WIDE_COUNTS_AT, WIDE_COUNTS_BYTES);
+        }
+        record.wide = tree.wide.is_some();
         slot.pending = Some((labels, record));
     }
 
@@ -205,12 +221,17 @@ fn decode(ctx: &GpuContext, labels: Vec<String>, record: FrameRecord, bytes: &[u
         None => (None, 0),
     };
     let counts = words(TREE_COUNTS_AT, 2);
+    let wide = record
+        .wide
+        .then(|| words(WIDE_COUNTS_AT, (WIDE_COUNTS_BYTES / 4) as usize));
     FrameResult {
         build,
         companion,
         animate,
         trace,
         tree_counts: (counts[0], counts[1]),
+        wide_counts: wide.as_ref().map(|w| (w[0], w[1])),
+        wide_overflowed: wide.is_some_and(|w| w[2] != 0),
         overflows,
     }
 }

@@ -1,8 +1,9 @@
 //! The egui side panel: device, performance (frame time plot, Mrays/s), scene and tree statistics,
 //! animation playback (play/pause/step/speed/seek, animate time, the SAH-over-time plot of rebuild
-//! versus refit), per-stage build times, SAH against the CPU sweep reference, and the controls
-//! (scene, builder or refit, leaf size, samples per frame, bounces, per-frame rebuild, camera reset,
-//! screenshot). It only edits `PanelControls` and returns `PanelActions`; the viewer applies them.
+//! versus refit), the traced node layout and its size, per-stage build times, SAH against the CPU
+//! sweep reference, and the controls (scene, builder or refit, node layout, leaf size, samples per
+//! frame, bounces, per-frame rebuild, camera reset, screenshot). It only edits `PanelControls`
+//! and returns `PanelActions`; the viewer applies them.
 
 use egui::{Color32, RichText};
 
@@ -13,8 +14,8 @@ use super::settings::ViewSettings;
 use super::stats::BuildTiming;
 use super::stats::FrameStats;
 use crate::anim::{AnimateStage, ANIMATIONS};
-use crate::bvh::Builder;
-use crate::bvh::UpdateMode;
+use crate::bvh::wide::{Layout, WideNode, WIDTH};
+use crate::bvh::{Builder, BvhNode, UpdateMode};
 use crate::scene::SCENES;
 
 /// Width of the panel in points.
@@ -35,6 +36,10 @@ pub struct PanelInfo<'a> {
     pub triangles: u32,
     pub nodes: u32,
     pub references: u32,
+    /// The layout the tracer traces.
+    pub layout: Layout,
+    /// (wide nodes, references) of the tree's wide layout, when it has one.
+    pub wide_counts: Option<(u32, u32)>,
     pub samples: u32,
     pub resolution: (u32, u32),
     pub reference: ReferenceState,
@@ -143,6 +148,11 @@ fn performance(ui: &mut egui::Ui, info: &PanelInfo) {
         }
     }
     ui.label(format!(
+        "layout: {} ({})",
+        info.layout.name(),
+        layout_detail(info.layout)
+    ));
+    ui.label(format!(
         "accumulated: {} spp at {}×{}",
         info.samples, info.resolution.0, info.resolution.1
     ));
@@ -217,6 +227,55 @@ fn scene(
     if let Some(sah) = info.stats.tree_sah {
         ui.label(format!("{} leaves", sah.leaves));
     }
+    tree_size(ui, info);
+}
+
+/// The traced tree's bytes (nodes and references); with the wide layout, against the binary
+/// tree it was converted from.
+fn tree_size(ui: &mut egui::Ui, info: &PanelInfo) {
+    let bytes = |nodes: u32, node_bytes: usize, references: u32| {
+        u64::from(nodes) * node_bytes as u64 + 4 * u64::from(references)
+    };
+    let binary = bytes(info.nodes, std::mem::size_of::<BvhNode>(), info.references);
+    match (info.layout, info.wide_counts) {
+        (Layout::Wide, Some((nodes, references))) => {
+            let wide = bytes(nodes, std::mem::size_of::<WideNode>(), references);
+            ui.label(format!("wide: {nodes} nodes · {references} references"));
+            let ratio = if binary > 0 {
+                format!(" ({:.2}× binary)", wide as f64 / binary as f64)
+            } else {
+                String::new()
+            };
+            ui.label(format!(
+                "tree: {}{ratio}; binary {}",
+                size_text(wide),
+                size_text(binary)
+            ));
+        }
+        (Layout::Wide, None) => {
+            ui.label("wide: converting…");
+        }
+        (Layout::Binary, _) => {
+            ui.label(format!("tree: {}", size_text(binary)));
+        }
+    }
+}
+
+/// `bytes` in KiB below a MiB, else in MiB.
+fn size_text(bytes: u64) -> String {
+    if bytes < 1 << 20 {
+        format!("{:.1} KiB", bytes as f64 / 1024.0)
+    } else {
+        format!("{:.2} MiB", bytes as f64 / f64::from(1 << 20))
+    }
+}
+
+/// What a layout's nodes are, for the panel.
+fn layout_detail(layout: Layout) -> String {
+    match layout {
+        Layout::Binary => format!("2-wide, {} B nodes", std::mem::size_of::<BvhNode>()),
+        Layout::Wide => format!("{WIDTH}-wide, {} B nodes", std::mem::size_of::<WideNode>()),
+    }
 }
 
 fn bvh(ui: &mut egui::Ui, info: &PanelInfo, settings: &mut ViewSettings) {
@@ -249,6 +308,23 @@ fn bvh(ui: &mut egui::Ui, info: &PanelInfo, settings: &mut ViewSettings) {
             }
         });
     settings.select_builder(builder);
+    egui::ComboBox::from_label("layout")
+        .selected_text(settings.layout.name())
+        .show_ui(ui, |ui| {
+            for &layout in Layout::ALL {
+                ui.selectable_value(
+                    &mut settings.layout,
+                    layout,
+                    format!("{} ({})", layout.name(), layout_detail(layout)),
+                );
+            }
+        })
+        .response
+        .on_hover_text(
+            "The node layout traced: the builder's binary tree, or that tree converted on the \
+             GPU after every update into the compressed 8-wide layout (Ylitie et al. 2017; \
+             stage \"wide\" among the build times)",
+        );
     ui.add_enabled(
         settings.builder.is_gpu(),
         egui::Checkbox::new(&mut settings.rebuild_every_frame, "rebuild every frame"),

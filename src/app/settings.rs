@@ -1,6 +1,7 @@
-//! The viewer's user-adjustable settings (builder or refit mode, leaf size, samples per frame,
-//! bounces, per-frame rebuild). Any change to them restarts accumulation.
+//! The viewer's user-adjustable settings (builder or refit mode, leaf size, node layout, samples
+//! per frame, bounces, per-frame rebuild). Any change to them restarts accumulation.
 
+use crate::bvh::wide::{Layout, MAX_WIDE_LEAF_SIZE};
 use crate::bvh::SahParams;
 use crate::bvh::UpdateMode;
 
@@ -9,12 +10,18 @@ pub struct ViewSettings {
     /// How the tree is built: a builder rebuilding it, or a refit of the first frame's tree.
     pub builder: UpdateMode,
     pub max_leaf_size: u32,
+    /// The node layout traced: the builder's binary tree, or that tree converted to the
+    /// compressed 8-wide layout after every update.
+    pub layout: Layout,
     pub samples_per_frame: u32,
     /// Diffuse bounces after the primary hit (the tracer's `max_depth` is this + 1).
     pub max_bounces: u32,
     /// Rebuild the BVH every frame (GPU builders; CPU builders build once per change).
     pub rebuild_every_frame: bool,
 }
+
+// Every leaf size the panel offers fits the wide layout's leaves (a byte per slot).
+const _: () = assert!(ViewSettings::MAX_LEAF_SIZE <= MAX_WIDE_LEAF_SIZE);
 
 impl ViewSettings {
     pub const MAX_SAMPLES_PER_FRAME: u32 = 64;
@@ -25,6 +32,7 @@ impl ViewSettings {
         Self {
             builder,
             max_leaf_size: SahParams::default().max_leaf_size,
+            layout: Layout::Binary,
             samples_per_frame: 1,
             max_bounces: 3,
             rebuild_every_frame: builder.is_gpu(),
@@ -75,6 +83,13 @@ mod tests {
         );
         s.select_builder(UpdateMode::Refit(Builder::Lbvh));
         assert!(s.rebuilds_every_frame(), "a refit runs on the GPU");
+    }
+
+    #[test]
+    fn the_binary_layout_is_traced_until_another_is_chosen() {
+        for mode in UpdateMode::all() {
+            assert_eq!(ViewSettings::new(mode).layout, Layout::Binary);
+        }
     }
 
     #[test]

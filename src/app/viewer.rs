@@ -7,6 +7,9 @@
 //! Accumulation goes on while nothing changes and restarts on any change (camera, settings, scene,
 //! window size, and every animated frame). Animated scenes (`crate::anim`) move their triangles on
 //! the GPU in the animate step (`animated_scene`), then the tree is rebuilt (or refitted) in place.
+//! With the wide layout setting every update also converts the tree (`tree.wide`, stage "wide")
+//! and the tracer traces that; a layout change rebuilds the tree and recreates the tracer before
+//! the frame's build, so the frame that first traces the wide layout has converted it.
 //!
 //! A frame is recorded, not waited for: animate, build, trace and tonemap go into one recording
 //! and one submission. The frame's statistics (stage times, rays, tree size) and the trees' SAH
@@ -33,6 +36,7 @@ use super::stats::{BuildTiming, FrameStats, TreeSah};
 use super::tradeoff_panel::{StudyScene, TradeoffPanel};
 use super::tree_snapshot::TreeSnapshot;
 use crate::anim::{is_animation, load_animation};
+use crate::bvh::wide::Layout;
 use crate::bvh::{Builder, TreeUpdater, UpdateMode};
 use crate::device::{Geometry, Tree};
 use crate::gpu::{GpuContext, ParamSlab, Recorder};
@@ -58,6 +62,8 @@ pub struct Viewer {
     tree: Tree,
     /// (nodes, references) of the traced tree, as last read back.
     tree_counts: (u32, u32),
+    /// (wide nodes, references) of its wide layout, as last read back (None: binary layout).
+    wide_counts: Option<(u32, u32)>,
     updater: TreeUpdater,
     /// The tree no longer matches the settings or the geometry: build before tracing.
     tree_dirty: bool,
@@ -97,6 +103,7 @@ impl Viewer {
             .unwrap_or_else(|| default_update_mode(ctx.info.device_type));
         let settings = ViewSettings::new(mode_for_scene(&options.scene, requested));
         let mut updater = TreeUpdater::new(ctx, settings.builder, &settings.sah_params())?;
+        updater.set_layout(ctx, settings.layout);
         let loaded = load_and_build(ctx, &options.scene, &mut updater)?;
         let mut viewer = Self {
             scene_radius: scene_radius(&loaded.scene),
@@ -105,6 +112,7 @@ impl Viewer {
             scene_id: 0,
             geometry: loaded.geometry,
             tree_counts: loaded.tree.counts(ctx)?,
+            wide_counts: loaded.tree.wide.as_ref().and_then(|w| w.counts(ctx).ok()),
             tree: loaded.tree,
             updater,
             tree_dirty: false,
@@ -156,6 +164,8 @@ impl Viewer {
             triangles: self.geometry.triangle_count,
             nodes: self.tree_counts.0,
             references: self.tree_counts.1,
+            layout: self.traced_layout(),
+            wide_counts: self.wide_counts,
             samples: self.tracer.as_ref().map_or(0, |t| t.samples_done()),
             resolution: (width, height),
             reference: self.reference.state(),
@@ -210,7 +220,7 @@ impl Viewer {
         record.wall_ms = start.elapsed().as_secs_f64() * 1e3;
         let counters = self.tracer.as_ref().map(|t| t.counters().clone());
         self.frame_readback
-            .record(&mut rec, counters.as_ref(), &self.tree.counts, record);
+            .record(&mut rec, counters.as_ref(), &self.tree, record);
         rec.submit();
         self.params = params;
         self.frame_readback.submitted(timer);
@@ -308,6 +318,11 @@ impl Viewer {
             }
         }
         self.tree_counts = result.tree_counts;
+        self.wide_counts = result.wide_counts;
+        if result.wide_overflowed {
+            self.error = Some("the wide conversion ran out of nodes".into());
+            self.halted = true;
+        }
         if result.overflows > 0 {
             self.error = Some(format!(
                 "{} paths overflowed the traversal stack (tree deeper than the kernel supports)",
@@ -398,6 +413,13 @@ impl Viewer {
         })
     }
 
+    /// The layout the tracer traces (the settings' before the first tracer exists).
+    fn traced_layout(&self) -> Layout {
+        self.tracer
+            .as_ref()
+            .map_or(self.applied.layout, |t| t.settings().layout)
+    }
+
     /// One line on how the viewer ran: frame time, fps, ray throughput, accumulated samples.
     pub fn summary(&self) -> String {
         let frame = match (self.stats.frame_ms, self.stats.fps()) {
@@ -413,8 +435,10 @@ impl Viewer {
             (t.samples_done(), t.settings().width, t.settings().height)
         });
         format!(
-            "viewer: {} on {}: {} frames, {frame}, {mrays} Mrays/s, {spp} spp at {width}x{height}",
+            "viewer: {} ({} layout) on {}: {} frames, {frame}, {mrays} Mrays/s, {spp} spp at \
+             {width}x{height}",
             self.updater.mode().name(),
+            self.traced_layout().name(),
             self.scene.name,
             self.stats.frames
         )
@@ -438,7 +462,8 @@ impl Viewer {
         let mode = mode_for_scene(name, self.applied.builder);
         if mode != self.applied.builder {
             match TreeUpdater::new(ctx, mode, &self.applied.sah_params()) {
-                Ok(updater) => {
+                Ok(mut updater) => {
+                    updater.set_layout(ctx, self.applied.layout);
                     self.updater = updater;
                     self.applied.select_builder(mode);
                     self.controls.settings.select_builder(mode);
@@ -461,6 +486,7 @@ impl Viewer {
                 self.scene = loaded.scene;
                 self.scene_id += 1;
                 self.tree_counts = loaded.tree.counts(ctx).unwrap_or_default();
+                self.wide_counts = loaded.tree.wide.as_ref().and_then(|w| w.counts(ctx).ok());
                 self.geometry = loaded.geometry;
                 self.tree = loaded.tree;
                 self.sah_pending = false;
@@ -489,7 +515,8 @@ impl Viewer {
         self.error = None;
         if wanted.builder != self.applied.builder {
             match TreeUpdater::new(ctx, wanted.builder, &wanted.sah_params()) {
-                Ok(updater) => {
+                Ok(mut updater) => {
+                    updater.set_layout(ctx, wanted.layout);
                     self.updater = updater;
                     self.tree_dirty = true;
                 }
@@ -503,6 +530,12 @@ impl Viewer {
         if wanted.max_leaf_size != self.applied.max_leaf_size {
             self.tree_dirty = true;
             self.updater.reset();
+        }
+        if wanted.layout != self.applied.layout {
+            // The next update converts the tree (or drops its wide layout); `fit_tracer` makes a
+            // tracer of the new layout, and this frame's build precedes its trace.
+            self.updater.set_layout(ctx, wanted.layout);
+            self.tree_dirty = true;
         }
         self.applied = wanted;
         self.request_reference();
@@ -518,8 +551,8 @@ impl Viewer {
         self.reference.request(key, &self.scene, params);
     }
 
-    /// Makes the tracer match the image area's size and the bounce setting (a new tracer starts
-    /// accumulating from zero).
+    /// Makes the tracer match the image area's size, the bounce setting and the layout (a new
+    /// tracer starts accumulating from zero).
     fn fit_tracer(&mut self, ctx: &GpuContext) {
         let rect = self.image_rect;
         if rect.is_empty() {
@@ -529,6 +562,7 @@ impl Viewer {
             width: rect.width,
             height: rect.height,
             max_depth: self.applied.max_depth(),
+            layout: self.applied.layout,
             ..RenderSettings::default()
         };
         if self.tracer.as_ref().is_some_and(|t| t.settings() == wanted) {
@@ -568,7 +602,9 @@ impl Viewer {
         let built = self
             .updater
             .record(rec, &self.geometry, &triangles, &mut self.tree);
-        self.tree_dirty = false;
+        // A failed update is tried again after the next change (not traced as it stands: a
+        // wide-layout tracer needs the conversion).
+        self.tree_dirty = built.is_err();
         match built {
             Ok(cpu_time) => {
                 record.built = true;

@@ -6,6 +6,7 @@ use std::time::Instant;
 
 use super::treelet::TreeletSettings;
 use super::update::{TreeUpdater, UpdateMode};
+use super::wide::{Layout, WideConverter, MAX_WIDE_LEAF_SIZE};
 use super::{build_sbvh, build_sweep_sah, Bvh, SahParams};
 use crate::device::{Geometry, Tree};
 use crate::gpu::{GpuContext, GpuTimer, ParamSlab, Recorder, StageTime, Timing, Warmup};
@@ -131,28 +132,31 @@ impl Builder {
             })
     }
 
-    /// Uploads `scene` and builds its tree, ready to trace. GPU builders run the untimed warm-up
-    /// builds of `timing` (pipeline compilation, GPU clocks) and then `timing.repeats` timed
-    /// builds, each submitted and waited for, reporting the one with the median time. CPU
-    /// builders are timed once.
+    /// Uploads `scene` and builds its tree in `layout`, ready to trace. GPU builders run the
+    /// untimed warm-up builds of `timing` (pipeline compilation, GPU clocks) and then
+    /// `timing.repeats` timed builds, each submitted and waited for, reporting the one with the
+    /// median time; the wide layout's conversion is one of their stages ("wide"). CPU builders
+    /// are timed once, and their upload is converted once on the GPU (timed as "wide").
     pub fn build(
         self,
         ctx: &GpuContext,
         scene: &Scene,
         params: &SahParams,
         timing: &Timing,
+        layout: Layout,
     ) -> Result<(Geometry, Tree, BuildReport)> {
         let geometry = Geometry::upload(ctx, scene)?;
         match self {
-            Builder::Sweep => cpu_build(ctx, geometry, "cpu sweep", || {
+            Builder::Sweep => cpu_build(ctx, geometry, "cpu sweep", layout, || {
                 build_sweep_sah(&scene.triangles, params)
             }),
-            Builder::Sbvh => cpu_build(ctx, geometry, "cpu sbvh", || {
+            Builder::Sbvh => cpu_build(ctx, geometry, "cpu sbvh", layout, || {
                 build_sbvh(&scene.triangles, params)
             }),
             Builder::Lbvh | Builder::Trbvh(_) | Builder::TrbvhSplit(_) => {
                 let mut tree = Tree::empty(ctx)?;
                 let mut updater = TreeUpdater::new(ctx, UpdateMode::Rebuild(self), params)?;
+                updater.set_layout(ctx, layout);
                 let passes = updater.pass_count();
                 let mut slab = ParamSlab::new(ctx);
                 let mut build_once = |timer: Option<&mut GpuTimer>| -> Result<()> {
@@ -200,24 +204,46 @@ impl Builder {
     }
 }
 
-/// Runs a CPU builder once (timed, CPU time) and uploads its tree.
+/// Runs a CPU builder once (timed, CPU time) and uploads its tree; for the wide layout the
+/// upload is converted on the GPU (its time added as stage "wide").
 fn cpu_build(
     ctx: &GpuContext,
     geometry: Geometry,
     label: &str,
+    layout: Layout,
     build: impl FnOnce() -> Bvh,
 ) -> Result<(Geometry, Tree, BuildReport)> {
     let start = Instant::now();
     let bvh = build();
-    let build_ms = start.elapsed().as_secs_f64() * 1e3;
-    let tree = Tree::upload(ctx, &bvh)?;
+    let cpu_ms = start.elapsed().as_secs_f64() * 1e3;
+    let mut tree = Tree::upload(ctx, &bvh)?;
+    let mut stages = vec![StageTime {
+        label: label.into(),
+        ms: Some(cpu_ms),
+    }];
+    if layout == Layout::Wide {
+        if let Some(n) = bvh
+            .nodes
+            .iter()
+            .find(|n| n.prim_count() > MAX_WIDE_LEAF_SIZE)
+        {
+            return Err(Error::InvalidArgument(format!(
+                "a leaf of {} triangles does not fit the wide layout (at most {MAX_WIDE_LEAF_SIZE}): lower --max-leaf-size",
+                n.prim_count()
+            )));
+        }
+        let mut timer = GpuTimer::new(ctx, 1);
+        let mut slab = ParamSlab::new(ctx);
+        let mut rec = Recorder::new(ctx, &mut slab, Some(&mut timer));
+        WideConverter::new(ctx).record(&mut rec, &mut tree)?;
+        rec.submit();
+        stages.extend(timer.read(ctx)?);
+    }
+    let build_ms = stages.iter().filter_map(|s| s.ms).sum();
     let report = BuildReport {
         build_ms,
-        wall_ms: build_ms,
-        stages: vec![StageTime {
-            label: label.into(),
-            ms: Some(build_ms),
-        }],
+        wall_ms: start.elapsed().as_secs_f64() * 1e3,
+        stages,
         builds_ms: vec![build_ms],
         warmup: Warmup::default(),
     };

@@ -15,9 +15,10 @@ mod traverse;
 pub mod treelet;
 mod update;
 mod validate;
+pub mod wide;
 
 pub use builder::{BuildReport, Builder, DEFAULT_SPLIT_PERCENT};
-pub use export::{read_bvh, write_bvh, BVH_MAGIC};
+pub use export::{read_bvh, read_wide_bvh, write_bvh, write_wide_bvh, BVH_MAGIC, WIDE_BVH_MAGIC};
 pub use node::{Bvh, BvhNode, LEAF_FLAG};
 pub use nodes_refit::{derive_refit_links, parents_and_leaves, NodesRefit, NODES_REFIT};
 pub use sah::{sah_cost, SahParams};

@@ -1,13 +1,16 @@
 //! How a frame's tree is produced — the one dispatch point over every way: a GPU builder
 //! rebuilds it (LBVH, TRBVH, TRBVH with pre-splitting), a CPU reference builder builds it and
 //! uploads it, or a refit keeps the topology of the tree built at the first frame and recomputes
-//! its boxes (`nodes_refit`). `UpdateMode` names the choice, `TreeUpdater` carries it out.
+//! its boxes (`nodes_refit`). `UpdateMode` names the choice, `TreeUpdater` carries it out; for
+//! the wide layout it then converts the binary tree on the GPU (`wide::WideConverter`, pass
+//! "wide"), every frame.
 
 use std::time::Instant;
 
 use super::lbvh::{LbvhBuilder, LBVH_PASSES};
 use super::nodes_refit::{derive_refit_links, NodesRefit};
 use super::treelet::{TrbvhBuilder, TreeletSettings};
+use super::wide::{Layout, WideConverter, MAX_WIDE_LEAF_SIZE};
 use super::{build_sbvh, build_sweep_sah, Builder, SahParams};
 use crate::device::{Geometry, Tree};
 use crate::gpu::{GpuContext, Recorder, StageTime};
@@ -107,6 +110,8 @@ pub struct TreeUpdater {
     /// Refit modes: build a new topology at the next update.
     rebuild_topology: bool,
     sah: SahParams,
+    /// Wide layout: the conversion that follows every update.
+    converter: Option<WideConverter>,
 }
 
 impl TreeUpdater {
@@ -131,7 +136,32 @@ impl TreeUpdater {
             refit: mode.is_refit().then(|| NodesRefit::new(ctx)),
             rebuild_topology: true,
             sah: *sah,
+            converter: None,
         })
+    }
+
+    /// The layout the next updates produce: binary, or binary converted to wide.
+    pub fn set_layout(&mut self, ctx: &GpuContext, layout: Layout) {
+        self.converter = match layout {
+            Layout::Binary => None,
+            Layout::Wide => self
+                .converter
+                .take()
+                .or_else(|| Some(WideConverter::new(ctx))),
+        };
+    }
+
+    pub fn layout(&self) -> Layout {
+        if self.converter.is_some() {
+            Layout::Wide
+        } else {
+            Layout::Binary
+        }
+    }
+
+    /// The wide conversion, when the layout is wide (tests fix its schedule).
+    pub fn converter_mut(&mut self) -> Option<&mut WideConverter> {
+        self.converter.as_mut()
     }
 
     pub fn mode(&self) -> UpdateMode {
@@ -155,6 +185,7 @@ impl TreeUpdater {
             Producer::Cpu(_) => 0,
         }
         .max(1)
+            + u32::from(self.converter.is_some())
     }
 
     /// Refits: the next update builds a new topology (after the animation looped, or a setting
@@ -168,7 +199,30 @@ impl TreeUpdater {
     /// the tree now and replaces `tree` by its upload, and returns its CPU time. A refit of a tree
     /// without refit links builds the topology first and derives them (flushing `rec` and reading
     /// the tree back: once per topology, not per frame).
+    /// With the wide layout the binary tree is then converted (`tree.wide`); with the binary
+    /// layout `tree.wide` is dropped.
     pub fn record(
+        &mut self,
+        rec: &mut Recorder<'_>,
+        geometry: &Geometry,
+        triangles: &[Triangle],
+        tree: &mut Tree,
+    ) -> Result<Option<StageTime>> {
+        if self.converter.is_some() && self.sah.max_leaf_size > MAX_WIDE_LEAF_SIZE {
+            return Err(Error::InvalidArgument(format!(
+                "leaves of up to {} triangles do not fit the wide layout (at most {MAX_WIDE_LEAF_SIZE})",
+                self.sah.max_leaf_size
+            )));
+        }
+        let cpu_time = self.record_binary(rec, geometry, triangles, tree)?;
+        match &self.converter {
+            Some(converter) => converter.record(rec, tree)?,
+            None => tree.wide = None,
+        }
+        Ok(cpu_time)
+    }
+
+    fn record_binary(
         &mut self,
         rec: &mut Recorder<'_>,
         geometry: &Geometry,

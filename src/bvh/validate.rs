@@ -89,11 +89,20 @@ pub enum ValidationError {
     TriangleTwiceInLeaf { node: usize, triangle: usize },
     #[error("the box of leaf {node} does not overlap triangle {triangle}")]
     TriangleNotOverlapped { node: usize, triangle: usize },
+    #[error("wide node {node} has no children")]
+    EmptyWideNode { node: usize },
+    #[error("wide node {node} has an exponent outside 1..=254 or a NaN origin")]
+    BadQuantizationFrame { node: usize },
+    #[error(
+        "slot {slot} of wide node {node} does not contain what lies beneath it \
+         (its quantized box is not conservative)"
+    )]
+    SlotNotContaining { node: usize, slot: usize },
 }
 
 /// How often a triangle may be referenced, and how a leaf box must relate to its triangles.
 #[derive(Clone, Copy, PartialEq)]
-enum References {
+pub(crate) enum References {
     /// Exactly once in the whole tree; leaf boxes contain their triangles.
     Single,
     /// At least once, at most once per leaf; leaf boxes overlap their triangles.

@@ -1,5 +1,6 @@
-//! `treelet bench`: for each requested builder, build, validate, measure SAH and trace diffuse paths;
-//! print one JSON object per line. Every timed series (builds, traces) follows a warm-up by time,
+//! `treelet bench`: for each requested builder and layout, build (and convert, for the wide
+//! layout), validate, measure SAH and tree bytes and trace diffuse paths; print one JSON object per
+//! line. Every timed series (builds, traces) follows a warm-up by time,
 //! so that a real GPU runs at full clocks, and is reported as min / median / max. GPU builders run
 //! before the CPU builders of the same scene (a long CPU build lets the GPU clock down).
 
@@ -9,7 +10,10 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 use serde::Serialize;
 use treelet::anim::load_still;
-use treelet::bvh::{sah_cost, validate, validate_with_references, write_bvh, Builder};
+use treelet::bvh::wide::{validate_wide, validate_wide_with_references, wide_sah_costs, Layout};
+use treelet::bvh::{
+    sah_cost, validate, validate_with_references, write_bvh, write_wide_bvh, Builder,
+};
 use treelet::gpu::{aggregate_stages, GpuContext, Spread, Timing, Warmup};
 use treelet::trace::{PathTracer, TraceStats};
 use treelet::Result;
@@ -33,8 +37,8 @@ pub struct BenchArgs {
     /// wall-clock time: an idle GPU needs ~0.1-0.5 s of work to reach full clocks
     #[arg(long, default_value_t = 500.0, value_parser = parse_warmup_ms)]
     warmup_ms: f64,
-    /// Write each built tree to this file (format in the README; with several builders the
-    /// builder label is added to the file name)
+    /// Write each built tree to this file in the layout traced (formats in the README; with
+    /// several builders or layouts their labels are added to the file name)
     #[arg(long)]
     export_bvh: Option<PathBuf>,
     /// Timed builds per GPU builder and timed traces per builder (min, median and max are reported)
@@ -57,6 +61,8 @@ fn parse_warmup_ms(s: &str) -> std::result::Result<f64, String> {
 struct BenchRecord {
     scene: String,
     builder: &'static str,
+    /// The node layout traced: binary, or wide (converted from the binary tree, stage "wide").
+    layout: &'static str,
     treelet_size: Option<u32>,
     rounds: Option<u32>,
     split_budget: Option<f64>,
@@ -65,8 +71,11 @@ struct BenchRecord {
     /// Triangle references in the leaves: the triangle count, plus the pieces of split
     /// triangles that ended up in different leaves (sbvh, trbvh-split).
     references: usize,
+    /// Binary tree: nodes and leaves; wide layout: wide nodes and leaf children.
     nodes: usize,
     leaves: usize,
+    /// Bytes of the traced layout's nodes and references.
+    tree_bytes: usize,
     /// Timed runs of each series, and the warm-up asked for before each.
     repeats: u32,
     warmup_ms: f64,
@@ -78,7 +87,12 @@ struct BenchRecord {
     mtris_per_s: f64,
     /// Per stage, of the median build.
     stages_ms: BTreeMap<String, Option<f64>>,
+    /// SAH of the binary tree.
     sah: f32,
+    /// Wide layout: SAH of the wide tree (greedy collapse, as converted) and of the SAH-optimal
+    /// collapse of the same binary tree (Ylitie et al.'s DP; computed, not built).
+    wide_sah: Option<f64>,
+    wide_sah_optimal: Option<f64>,
     valid: bool,
     width: u32,
     height: u32,
@@ -104,27 +118,57 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
         warmup_runs: args.warmup,
         repeats: args.repeats,
     };
-    for &builder in &builders {
-        let (geometry, tree, report) = builder.build(gpu, &scene, &params, &timing)?;
+    let layouts = &args.trace.layout;
+    let runs: Vec<(Builder, Layout)> = builders
+        .iter()
+        .flat_map(|&b| layouts.iter().map(move |&l| (b, l)))
+        .collect();
+    for &(builder, layout) in &runs {
+        let (geometry, tree, report) = builder.build(gpu, &scene, &params, &timing, layout)?;
         let bvh = tree.download(gpu)?;
-        let validation = if builder.duplicates_references() {
-            validate_with_references(&bvh, &scene.triangles)
-        } else {
-            validate(&bvh, &scene.triangles)
+        let label = format!("{} {}", builder.label(), layout.name());
+        let references = builder.duplicates_references();
+        let (validation, nodes, leaves, tree_bytes) = match &tree.wide {
+            None => {
+                let validation = if references {
+                    validate_with_references(&bvh, &scene.triangles)
+                } else {
+                    validate(&bvh, &scene.triangles)
+                };
+                let bytes =
+                    std::mem::size_of_val(bvh.nodes.as_slice()) + 4 * bvh.prim_indices.len();
+                (validation, bvh.nodes.len(), bvh.leaf_count(), bytes)
+            }
+            Some(wide) => {
+                let wide = wide.download(gpu)?;
+                let validation = if references {
+                    validate_wide_with_references(&wide, &scene.triangles)
+                } else {
+                    validate_wide(&wide, &scene.triangles)
+                };
+                if let Some(path) = &args.export_bvh {
+                    let path = export_path(path, &label, runs.len());
+                    write_wide_bvh(&path, &wide, scene.triangles.len() as u32)?;
+                    log::info!("wrote {}", path.display());
+                }
+                (
+                    validation,
+                    wide.nodes.len(),
+                    wide.leaf_count(),
+                    wide.bytes(),
+                )
+            }
         };
         if let Err(e) = &validation {
-            log::error!("{} tree of {} is invalid: {e}", builder.label(), scene.name);
+            log::error!("{label} tree of {} is invalid: {e}", scene.name);
         }
-        if let Some(path) = &args.export_bvh {
-            let path = if builders.len() > 1 {
-                labelled_path(path, &builder.label())
-            } else {
-                path.clone()
-            };
+        if let (Some(path), None) = (&args.export_bvh, &tree.wide) {
+            let path = export_path(path, &label, runs.len());
             write_bvh(&path, &bvh, scene.triangles.len() as u32)?;
             log::info!("wrote {}", path.display());
         }
-        let mut tracer = PathTracer::new(gpu, args.trace.render_settings())?;
+        let wide_sah = tree.wide.is_some().then(|| wide_sah_costs(&bvh, &params));
+        let mut tracer = PathTracer::new(gpu, args.trace.render_settings(layout))?;
         let trace = |tracer: &mut PathTracer| {
             tracer.reset();
             tracer.trace(
@@ -147,6 +191,7 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
         let record = BenchRecord {
             scene: scene.name.clone(),
             builder: builder.name(),
+            layout: layout.name(),
             treelet_size: builder.treelet_settings().map(|s| s.treelet_size),
             rounds: builder.treelet_settings().map(|s| s.rounds),
             split_budget: builder
@@ -155,8 +200,9 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
             adapter: gpu.adapter_description(),
             triangles: scene.triangles.len(),
             references: bvh.prim_indices.len(),
-            nodes: bvh.nodes.len(),
-            leaves: bvh.leaf_count(),
+            nodes,
+            leaves,
+            tree_bytes,
             repeats: timing.repeats,
             warmup_ms: timing.warmup_ms,
             build_ms: report.build_ms,
@@ -169,6 +215,8 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
                 .map(|s| (s.label, s.ms))
                 .collect(),
             sah: sah_cost(&bvh, &params),
+            wide_sah: wide_sah.map(|c| c.0),
+            wide_sah_optimal: wide_sah.map(|c| c.1),
             valid: validation.is_ok(),
             width: args.trace.width,
             height: args.trace.height,
@@ -198,6 +246,15 @@ fn median_trace(mut traces: Vec<TraceStats>) -> TraceStats {
     };
     traces.sort_by(|a, b| key(a).total_cmp(&key(b)));
     traces.swap_remove(traces.len() / 2)
+}
+
+/// The export file of a run: `path` itself when it is the only run, else labelled.
+fn export_path(path: &Path, label: &str, runs: usize) -> PathBuf {
+    if runs > 1 {
+        labelled_path(path, label)
+    } else {
+        path.to_path_buf()
+    }
 }
 
 /// `out.bvh` + "trbvh n=7 r=3" -> `out-trbvh-n7-r3.bvh`.

@@ -8,6 +8,7 @@ mod view;
 
 use clap::{Args, Parser, Subcommand};
 use treelet::bvh::treelet::TreeletSettings;
+use treelet::bvh::wide::Layout;
 use treelet::bvh::{Builder, SahParams, DEFAULT_SPLIT_PERCENT};
 use treelet::gpu::{GpuContext, GpuOptions};
 use treelet::trace::RenderSettings;
@@ -79,6 +80,10 @@ pub struct TraceArgs {
     /// `bench` takes a comma-separated list
     #[arg(long, value_delimiter = ',', value_parser = parse_split_budget)]
     split_budget: Vec<u32>,
+    /// Node layout traced: binary (the builder's tree) or wide (compressed 8-wide, converted from
+    /// it on the GPU); `bench` takes a comma-separated list and measures each on the same tree
+    #[arg(long, value_delimiter = ',', value_parser = parse_layout, default_value = "binary")]
+    layout: Vec<Layout>,
 }
 
 impl TraceArgs {
@@ -175,12 +180,24 @@ impl TraceArgs {
             .collect())
     }
 
-    fn render_settings(&self) -> RenderSettings {
+    /// The settings of a tracer of `layout`.
+    fn render_settings(&self, layout: Layout) -> RenderSettings {
         RenderSettings {
             width: self.width,
             height: self.height,
             max_depth: self.max_depth,
+            layout,
             ..RenderSettings::default()
+        }
+    }
+
+    /// The one layout of commands that trace one (`render`).
+    fn single_layout(&self) -> Result<Layout> {
+        match self.layout[..] {
+            [layout] => Ok(layout),
+            _ => Err(treelet::Error::InvalidArgument(
+                "this command takes one --layout".into(),
+            )),
         }
     }
 
@@ -206,6 +223,10 @@ fn parse_split_budget(text: &str) -> std::result::Result<u32, String> {
         return Err(format!("split budget must be between 0 and 1, got {text}"));
     }
     Ok((beta * 100.0).round() as u32)
+}
+
+fn parse_layout(name: &str) -> std::result::Result<Layout, String> {
+    Layout::parse(name).map_err(|e| e.to_string())
 }
 
 fn parse_preset(name: &str) -> std::result::Result<TreeletSettings, String> {

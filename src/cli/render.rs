@@ -58,14 +58,19 @@ pub fn run(gpu: &GpuContext, args: &RenderArgs) -> Result<()> {
             "render takes one --treelet-size and one --rounds value".into(),
         ));
     };
-    let (geometry, tree, report) = builder.build(gpu, &scene, &params, &Timing::quick(1))?;
+    let layout = args.trace.single_layout()?;
+    let (geometry, tree, report) =
+        builder.build(gpu, &scene, &params, &Timing::quick(1), layout)?;
+    let nodes = match &tree.wide {
+        Some(wide) => format!("{} wide nodes", wide.counts(gpu)?.0),
+        None => format!("{} nodes", tree.counts(gpu)?.0),
+    };
     log::info!(
-        "{} build: {:.2} ms, {} nodes",
+        "{} build: {:.2} ms, {nodes}",
         builder.label(),
-        report.build_ms,
-        tree.counts(gpu)?.0
+        report.build_ms
     );
-    let mut tracer = PathTracer::new(gpu, args.trace.render_settings())?;
+    let mut tracer = PathTracer::new(gpu, args.trace.render_settings(layout))?;
     let stats = tracer.trace(
         gpu,
         &geometry,

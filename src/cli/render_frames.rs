@@ -31,6 +31,8 @@ use super::render::RenderArgs;
 struct FrameRecord {
     scene: String,
     builder: String,
+    /// The node layout traced (binary, or wide converted from it as a build stage).
+    layout: &'static str,
     frame: u32,
     t: f32,
     triangles: u32,
@@ -90,8 +92,10 @@ pub fn run(gpu: &GpuContext, args: &RenderArgs, frames: u32) -> Result<()> {
     );
     let geometry = Geometry::upload(gpu, &first)?;
     let mut tree = Tree::empty(gpu)?;
+    let layout = args.trace.single_layout()?;
     let mut updater = TreeUpdater::new(gpu, mode, &params)?;
-    let mut tracer = PathTracer::new(gpu, args.trace.render_settings())?;
+    updater.set_layout(gpu, layout);
+    let mut tracer = PathTracer::new(gpu, args.trace.render_settings(layout))?;
     let mut slab = ParamSlab::new(gpu);
     let bar = ProgressBar::new(u64::from(frames));
     if let Ok(style) = ProgressStyle::with_template("{bar:30} {pos}/{len} frames {msg}") {
@@ -145,6 +149,7 @@ pub fn run(gpu: &GpuContext, args: &RenderArgs, frames: u32) -> Result<()> {
         let record = FrameRecord {
             scene: animation.name().to_owned(),
             builder: mode.name().to_owned(),
+            layout: layout.name(),
             frame,
             t,
             triangles: geometry.triangle_count,

@@ -5,6 +5,8 @@
 
 mod geometry;
 mod tree;
+mod wide_tree;
 
 pub use geometry::Geometry;
 pub use tree::{RefitLinks, Tree};
+pub use wide_tree::WideTree;

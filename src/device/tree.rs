@@ -3,6 +3,7 @@
 //! the GPU, so the CPU learns the sizes only by reading them (`Tree::counts`), off the per-frame
 //! path. The buffers grow to what a build needs and are reused by the next build.
 
+use super::WideTree;
 use crate::bvh::{Bvh, BvhNode};
 use crate::gpu::{read_buffer, storage_buffer, storage_buffer_zeroed, GpuContext};
 use crate::{Error, Result};
@@ -14,6 +15,9 @@ pub struct Tree {
     pub counts: wgpu::Buffer,
     /// What a refit of this tree needs (derived once per topology, dropped by every build).
     pub refit_links: Option<RefitLinks>,
+    /// The tree in the compressed wide layout, when a conversion made it (see
+    /// `bvh::wide::WideConverter`); builds keep its buffers for the next conversion.
+    pub wide: Option<WideTree>,
 }
 
 /// A tree's parent links and leaves, for refits (see `bvh::derive_refit_links`).
@@ -33,6 +37,7 @@ impl Tree {
             prim_indices: storage_buffer_zeroed(ctx, "prim indices", 4)?,
             counts: storage_buffer_zeroed(ctx, "tree counts", 8)?,
             refit_links: None,
+            wide: None,
         })
     }
 
@@ -47,6 +52,7 @@ impl Tree {
             prim_indices: storage_buffer(ctx, "prim indices", &bvh.prim_indices)?,
             counts: storage_buffer(ctx, "tree counts", &counts)?,
             refit_links: None,
+            wide: None,
         })
     }
 

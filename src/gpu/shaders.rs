@@ -50,6 +50,26 @@ const INCLUDES: &[(&str, &str)] = &[
         include_str!("../../shaders/include/treelet_round.wgsl"),
     ),
     (
+        "ray_box.wgsl",
+        include_str!("../../shaders/include/ray_box.wgsl"),
+    ),
+    (
+        "wide_node.wgsl",
+        include_str!("../../shaders/include/wide_node.wgsl"),
+    ),
+    (
+        "wide_traverse.wgsl",
+        include_str!("../../shaders/include/wide_traverse.wgsl"),
+    ),
+    (
+        "wide_collapse.wgsl",
+        include_str!("../../shaders/include/wide_collapse.wgsl"),
+    ),
+    (
+        "path_integrator.wgsl",
+        include_str!("../../shaders/include/path_integrator.wgsl"),
+    ),
+    (
         "treelet_dp.wgsl",
         include_str!("../../shaders/include/treelet_dp.wgsl"),
     ),

@@ -5,7 +5,8 @@
 use glam::Vec3;
 
 use super::image_tonemap::{TonemapParams, IMAGE_TONEMAP};
-use super::paths_trace::{TraceParams, PATHS_TRACE};
+use super::paths_trace::{TraceParams, PATHS_TRACE, PATHS_TRACE_WIDE};
+use crate::bvh::wide::Layout;
 use crate::device::{Geometry, Tree};
 use crate::gpu::{
     read_buffer, storage_buffer_zeroed, GpuContext, GpuTimer, Grid, Kernel, ParamSlab, Recorder,
@@ -21,6 +22,8 @@ pub struct RenderSettings {
     /// Rays per path at most (1 = primary rays only).
     pub max_depth: u32,
     pub exposure: f32,
+    /// The node layout traced (the wide one needs a tree converted by the update).
+    pub layout: Layout,
 }
 
 impl Default for RenderSettings {
@@ -30,6 +33,7 @@ impl Default for RenderSettings {
             height: 480,
             max_depth: 4,
             exposure: 1.0,
+            layout: Layout::Binary,
         }
     }
 }
@@ -80,6 +84,7 @@ impl RecordedTrace {
 pub struct PathTracer {
     settings: RenderSettings,
     trace: Kernel<TraceParams>,
+    trace_wide: Kernel<TraceParams>,
     tonemap: Kernel<TonemapParams>,
     accum: wgpu::Buffer,
     pixels: wgpu::Buffer,
@@ -109,6 +114,7 @@ impl PathTracer {
         Ok(Self {
             settings,
             trace: Kernel::new(ctx, &PATHS_TRACE),
+            trace_wide: Kernel::new(ctx, &PATHS_TRACE_WIDE),
             tonemap: Kernel::new(ctx, &IMAGE_TONEMAP),
             accum: storage_buffer_zeroed(ctx, "accumulation", pixel_count * 16)?,
             pixels: storage_buffer_zeroed(ctx, "pixels", pixel_count * 4)?,
@@ -138,7 +144,8 @@ impl PathTracer {
         &self.counters
     }
 
-    /// Records `samples` more paths per pixel through `tree` (pass "trace"), accumulating.
+    /// Records `samples` more paths per pixel through `tree` in the settings' layout (pass
+    /// "trace"), accumulating. An error when the wide layout is asked for and the tree has none.
     pub fn record(
         &mut self,
         rec: &mut Recorder<'_>,
@@ -165,6 +172,17 @@ impl PathTracer {
                 per_dispatch * MAX_DISPATCHES
             )));
         }
+        let (kernel, nodes, prim_indices) = match s.layout {
+            Layout::Binary => (&self.trace, &tree.nodes, &tree.prim_indices),
+            Layout::Wide => {
+                let wide = tree.wide.as_ref().ok_or_else(|| {
+                    Error::InvalidArgument(
+                        "the wide layout was asked for, but the tree was not converted".into(),
+                    )
+                })?;
+                (&self.trace_wide, &wide.nodes, &wide.prim_indices)
+            }
+        };
         if self.samples_done == 0 {
             rec.encoder().clear_buffer(&self.accum, 0, None);
         }
@@ -176,14 +194,14 @@ impl PathTracer {
             let batch = remaining.min(per_dispatch);
             let params = self.params(camera, sky, geometry.light_count, batch, slot);
             pass.dispatch(
-                &self.trace,
+                kernel,
                 grid,
                 &params,
                 &[
                     &geometry.triangles,
                     &geometry.materials,
-                    &tree.nodes,
-                    &tree.prim_indices,
+                    nodes,
+                    prim_indices,
                     &self.accum,
                     &self.counters,
                     &geometry.lights,

@@ -1,6 +1,7 @@
-//! The diffuse path-tracing kernel (`paths_trace`): its parameters and declaration. One
-//! invocation per pixel traces `samples` paths through the BVH (closest hit per bounce, any hit
-//! per point light) and accumulates their radiance; every ray is counted.
+//! The diffuse path-tracing kernels (`paths_trace` through the binary BVH, `paths_trace_wide`
+//! through the compressed wide BVH): their parameters and declarations. One invocation per pixel
+//! traces `samples` paths through the BVH (closest hit per bounce, any hit per point light) and
+//! accumulates their radiance; every ray is counted.
 
 use bytemuck::{Pod, Zeroable};
 
@@ -28,4 +29,7 @@ pub struct TraceParams {
 }
 
 kernel!(pub PATHS_TRACE: TraceParams = "paths_trace"::"main", [8, 8, 1],
+    [Read, Read, Read, Read, ReadWrite, ReadWrite, Read]);
+
+kernel!(pub PATHS_TRACE_WIDE: TraceParams = "paths_trace_wide"::"main", [8, 8, 1],
     [Read, Read, Read, Read, ReadWrite, ReadWrite, Read]);

@@ -1,8 +1,9 @@
-//! Batched ray queries on the GPU (kernel `rays_intersect`): the closest hit of every ray, or
-//! any hit in its interval, through a tree.
+//! Batched ray queries on the GPU (kernels `rays_intersect`, `rays_intersect_wide`): the closest
+//! hit of every ray, or any hit in its interval, through a tree in the binary or the wide layout.
 
 use bytemuck::{Pod, Zeroable};
 
+use crate::bvh::wide::Layout;
 use crate::device::{Geometry, Tree};
 use crate::geometry::{Hit, Ray};
 use crate::gpu::{
@@ -25,6 +26,9 @@ pub struct QueryParams {
 kernel!(pub RAYS_INTERSECT: QueryParams = "rays_intersect"::"main", [64, 1, 1],
     [Read, Read, Read, Read, ReadWrite, ReadWrite]);
 
+kernel!(pub RAYS_INTERSECT_WIDE: QueryParams = "rays_intersect_wide"::"main", [64, 1, 1],
+    [Read, Read, Read, Read, ReadWrite, ReadWrite]);
+
 /// Closest hit of every ray through `tree`. Misses have `tri == Hit::MISS`.
 pub fn closest_hits(
     ctx: &GpuContext,
@@ -32,7 +36,7 @@ pub fn closest_hits(
     tree: &Tree,
     rays: &[Ray],
 ) -> Result<Vec<Hit>> {
-    query(ctx, geometry, tree, rays, false)
+    query(ctx, geometry, tree, rays, false, Layout::Binary)
 }
 
 /// Some hit of every ray in its interval (the first the traversal finds, as for shadow rays).
@@ -43,7 +47,27 @@ pub fn any_hits(
     tree: &Tree,
     rays: &[Ray],
 ) -> Result<Vec<Hit>> {
-    query(ctx, geometry, tree, rays, true)
+    query(ctx, geometry, tree, rays, true, Layout::Binary)
+}
+
+/// [`closest_hits`] through the tree's wide layout (`tree.wide`, from a conversion).
+pub fn closest_hits_wide(
+    ctx: &GpuContext,
+    geometry: &Geometry,
+    tree: &Tree,
+    rays: &[Ray],
+) -> Result<Vec<Hit>> {
+    query(ctx, geometry, tree, rays, false, Layout::Wide)
+}
+
+/// [`any_hits`] through the tree's wide layout (`tree.wide`, from a conversion).
+pub fn any_hits_wide(
+    ctx: &GpuContext,
+    geometry: &Geometry,
+    tree: &Tree,
+    rays: &[Ray],
+) -> Result<Vec<Hit>> {
+    query(ctx, geometry, tree, rays, true, Layout::Wide)
 }
 
 fn query(
@@ -52,13 +76,30 @@ fn query(
     tree: &Tree,
     rays: &[Ray],
     any_hit: bool,
+    layout: Layout,
 ) -> Result<Vec<Hit>> {
     if rays.is_empty() {
         return Ok(Vec::new());
     }
     let ray_count = u32::try_from(rays.len())
         .map_err(|_| Error::InvalidArgument(format!("{} rays in one batch", rays.len())))?;
-    let kernel = Kernel::new(ctx, &RAYS_INTERSECT);
+    let (kernel, nodes, prim_indices) = match layout {
+        Layout::Binary => (
+            Kernel::new(ctx, &RAYS_INTERSECT),
+            &tree.nodes,
+            &tree.prim_indices,
+        ),
+        Layout::Wide => {
+            let wide = tree.wide.as_ref().ok_or_else(|| {
+                Error::InvalidArgument("the tree has no wide layout (convert it first)".into())
+            })?;
+            (
+                Kernel::new(ctx, &RAYS_INTERSECT_WIDE),
+                &wide.nodes,
+                &wide.prim_indices,
+            )
+        }
+    };
     let grid = kernel.grid(ctx, ray_count);
     let params = QueryParams {
         ray_count,
@@ -77,8 +118,8 @@ fn query(
         &params,
         &[
             &geometry.triangles,
-            &tree.nodes,
-            &tree.prim_indices,
+            nodes,
+            prim_indices,
             &ray_buffer,
             &hits,
             &counters,

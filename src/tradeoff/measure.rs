@@ -7,6 +7,7 @@
 //! the medians (`median_of_passes`), so load that comes and goes affects all of them alike.
 
 use super::Measurement;
+use crate::bvh::wide::Layout;
 use crate::bvh::{sah_cost, validate, validate_with_references, Builder, SahParams};
 use crate::gpu::{GpuContext, Timing};
 use crate::scene::{Camera, Scene};
@@ -38,8 +39,13 @@ pub fn measure(
             settings.spp, settings.repeats
         )));
     }
-    let (geometry, tree, report) =
-        builder.build(ctx, scene, &settings.sah, &Timing::quick(settings.repeats))?;
+    let (geometry, tree, report) = builder.build(
+        ctx,
+        scene,
+        &settings.sah,
+        &Timing::quick(settings.repeats),
+        Layout::Binary,
+    )?;
     let bvh = tree.download(ctx)?;
     let validation = if builder.duplicates_references() {
         validate_with_references(&bvh, &scene.triangles)

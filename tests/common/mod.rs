@@ -279,3 +279,13 @@ pub fn assert_clean_failure(args: &[&str], expected: &str) {
         "{args:?}: expected '{expected}' in: {stderr}"
     );
 }
+
+/// Converts `tree` into the wide layout on the GPU (`tree.wide`), as an update does.
+pub fn convert_wide(tree: &mut treelet::device::Tree) {
+    let mut slab = treelet::gpu::ParamSlab::new(gpu());
+    let mut rec = treelet::gpu::Recorder::new(gpu(), &mut slab, None);
+    treelet::bvh::wide::WideConverter::new(gpu())
+        .record(&mut rec, tree)
+        .unwrap();
+    rec.submit();
+}

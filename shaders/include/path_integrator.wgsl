@@ -1,0 +1,132 @@
+// The diffuse path integrator of the path-tracing kernels (paths_trace.wgsl: binary BVH,
+// paths_trace_wide.wgsl: wide BVH), which declare the bindings and include their traversal
+// (`trace_closest`, `trace_any`) before this file.
+// Diffuse path tracing: one invocation per pixel, `samples` paths per pixel per dispatch, each
+// with up to `max_depth` closest-hit rays (cosine-weighted bounces; emissive surfaces, a sky and
+// point lights as light). At every path vertex each point light is sampled with a shadow ray
+// (next-event estimation) and adds albedo · intensity · cos θ when visible, with no distance
+// falloff (the BART scenes' Whitted-style light convention, see `PointLight`). Radiance sums
+// accumulate progressively in `accum` (rgb sum, sample count in w). Every traced ray, bounce and
+// shadow, is counted (workgroup reduction, then one global atomic per workgroup).
+#include "random.wgsl"
+
+struct TraceParams {
+    eye: vec3<f32>,
+    seed: u32,
+    // Camera basis scaled to the image plane at distance 1: right * tan(fov/2) * aspect, ...
+    right: vec3<f32>,
+    width: u32,
+    up: vec3<f32>,
+    height: u32,
+    forward: vec3<f32>,
+    max_depth: u32,
+    sky: vec3<f32>,
+    samples: u32,
+    light_count: u32,
+    // Always 0 (see `opaque` in ray_triangle.wgsl).
+    opaque_zero: u32,
+    // This dispatch's pair of `counters`.
+    counter_slot: u32,
+    pad: u32,
+}
+
+struct PointLight {
+    position: vec3<f32>,
+    intensity: vec3<f32>,
+}
+
+var<workgroup> workgroup_rays: atomic<u32>;
+
+const PI: f32 = 3.14159265358979;
+
+fn sky_radiance(dir: vec3<f32>) -> vec3<f32> {
+    // Zenith colour above, fading to a darker horizon and ground.
+    let h = clamp(dir.y, -1.0, 1.0);
+    return params.sky * mix(0.35, 1.0, max(h, 0.0)) * select(0.6, 1.0, h >= 0.0);
+}
+
+// Cosine-weighted direction around the unit normal n (Duff et al. 2017 orthonormal basis).
+fn cosine_direction(n: vec3<f32>, rng: ptr<function, u32>) -> vec3<f32> {
+    let r1 = random_f32(rng);
+    let r2 = random_f32(rng);
+    let phi = 2.0 * PI * r1;
+    let r = sqrt(r2);
+    let s = select(-1.0, 1.0, n.z >= 0.0);
+    let a = -1.0 / (s + n.z);
+    let b = n.x * n.y * a;
+    let t = vec3<f32>(1.0 + s * n.x * n.x * a, s * b, -s * n.x);
+    let bt = vec3<f32>(b, s + n.y * n.y * a, -n.y);
+    return normalize(t * (r * cos(phi)) + bt * (r * sin(phi)) + n * sqrt(max(0.0, 1.0 - r2)));
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    if lid == 0u {
+        atomicStore(&workgroup_rays, 0u);
+    }
+    workgroupBarrier();
+    var rays = 0u;
+    var overflows = 0u;
+    if gid.x < params.width && gid.y < params.height {
+        let pixel = gid.y * params.width + gid.x;
+        var rng = pcg_hash(pixel ^ pcg_hash(params.seed));
+        var sum = vec3<f32>(0.0);
+        for (var s = 0u; s < params.samples; s++) {
+            let jitter = vec2<f32>(random_f32(&rng), random_f32(&rng));
+            let ndc = vec2<f32>(
+                2.0 * (f32(gid.x) + jitter.x) / f32(params.width) - 1.0,
+                1.0 - 2.0 * (f32(gid.y) + jitter.y) / f32(params.height),
+            );
+            var origin = params.eye;
+            var dir = normalize(params.forward + ndc.x * params.right + ndc.y * params.up);
+            var throughput = vec3<f32>(1.0);
+            var radiance = vec3<f32>(0.0);
+            for (var depth = 0u; depth < params.max_depth; depth++) {
+                let traced = trace_closest(origin, dir, 0.0, 3.0e38, params.opaque_zero);
+                rays++;
+                overflows += traced.overflow;
+                let hit = traced.hit;
+                if hit.tri == MISS {
+                    radiance += throughput * sky_radiance(dir);
+                    break;
+                }
+                let tri = triangles[hit.tri];
+                let material = materials[tri.material];
+                radiance += throughput * material.emission;
+                throughput *= material.albedo;
+                var n = normalize(cross(tri.v1 - tri.v0, tri.v2 - tri.v0));
+                if dot(n, dir) > 0.0 {
+                    n = -n;
+                }
+                let p = origin + hit.t * dir;
+                let eps = 1e-4 * max(1.0, max(abs(p.x), max(abs(p.y), abs(p.z))));
+                origin = p + n * eps;
+                for (var l = 0u; l < params.light_count; l++) {
+                    let light = lights[l];
+                    let to_light = light.position - origin;
+                    let distance = length(to_light);
+                    let cos_theta = dot(n, to_light) / max(distance, 1e-30);
+                    if cos_theta > 0.0 {
+                        let shadow = trace_any(origin, to_light / distance, 0.0, distance, params.opaque_zero);
+                        rays++;
+                        overflows += shadow.overflow;
+                        if shadow.hit.tri == MISS {
+                            radiance += throughput * light.intensity * cos_theta;
+                        }
+                    }
+                }
+                dir = cosine_direction(n, &rng);
+            }
+            sum += radiance;
+        }
+        accum[pixel] += vec4<f32>(sum, f32(params.samples));
+    }
+    atomicAdd(&workgroup_rays, rays);
+    if overflows != 0u {
+        atomicAdd(&counters[2u * params.counter_slot + 1u], overflows);
+    }
+    workgroupBarrier();
+    if lid == 0u {
+        atomicAdd(&counters[2u * params.counter_slot], atomicLoad(&workgroup_rays));
+    }
+}

@@ -1,0 +1,251 @@
+// Binary-to-wide conversion, one wide node per invocation (CPU twin: `WideBvh::from_binary`,
+// src/bvh/wide/convert.rs; the kernels wide_nodes_emit.wgsl and wide_nodes_finish.wgsl run it
+// level by level, top-down). Wide node w is made from binary node `wide_sources[w]`:
+// 1. Children: start from its two children; while fewer than 8, open the internal child of the
+//    largest surface area (its two children replace it). The greedy collapse of the wide-BVH
+//    literature in place of Ylitie et al.'s SAH-optimal DP.
+// 2. Slots: child j goes to the free slot s maximizing Σ_a ±(centre_j − centre_node)_a (+ where
+//    bit a of s is set), pairs taken greedily best first (the paper's octant assignment, greedy
+//    instead of an auction); the traversal then visits slots in ray-octant order.
+// 3. Quantization: per axis the smallest exponent e with origin + 255·2^e ≥ the node's max, and
+//    per child lo = the largest q with origin + q·2^e ≤ min, hi = the smallest with ≥ max (f32
+//    arithmetic; the products are exact, so fused or not every device rounds alike).
+// 4. Output: internal children get consecutive wide nodes from an atomic counter (their sources
+//    are written for the next level), leaf children's references are copied to consecutive
+//    entries of `wide_prims`.
+// Every decision uses additions, exact products or `unfused` ones: the tree is the same on every
+// device, up to the numbering of nodes and reference blocks (allocation order).
+#include "bvh_node.wgsl"
+#include "wide_node.wgsl"
+
+struct WideParams {
+    // Level of the tree this dispatch emits (0: the root); the per-level kernel only.
+    level: u32,
+    // Indirect level dispatches after the root's (records 1..=level_dispatches + 1 exist).
+    level_dispatches: u32,
+    // Wide nodes `wide_nodes` holds.
+    capacity: u32,
+    // Always 0 (see `unfused`).
+    zero: u32,
+}
+
+@group(0) @binding(0) var<uniform> params: WideParams;
+@group(0) @binding(1) var<storage, read> nodes: array<BvhNode>;
+@group(0) @binding(2) var<storage, read> prim_indices: array<u32>;
+@group(0) @binding(3) var<storage, read_write> wide_nodes: array<WideNode>;
+@group(0) @binding(4) var<storage, read_write> wide_prims: array<u32>;
+// Binary node of each wide node.
+// Binary node of each wide node.
+@group(0) @binding(5) var<storage, read_write> wide_sources: array<u32>;
+// [0] wide nodes allocated, [1] references written, [2] capacity overflows.
+@group(0) @binding(6) var<storage, read_write> wide_counters: array<atomic<u32>>;
+// Level records, 8 words per level: [workgroups x, y, z, first node, end node, 0, 0, 0]; even
+// levels in one buffer, odd in the other, so that a level dispatch reads its own record (and
+// its indirect arguments) from one and sizes the next level in the other.
+@group(0) @binding(7) var<storage, read> this_level: array<u32>;
+@group(0) @binding(8) var<storage, read_write> next_level: array<atomic<u32>>;
+
+const RECORD_WORDS: u32 = 8u;
+const EMIT_WORKGROUP: u32 = 64u;
+
+fn record_word(level: u32, word: u32) -> u32 {
+    return RECORD_WORDS * level + word;
+}
+
+// x, with the product that computed it kept apart from any following addition.
+fn unfused(x: f32) -> f32 {
+    return bitcast<f32>(bitcast<u32>(x) ^ params.zero);
+}
+
+fn half_area(lo: vec3<f32>, hi: vec3<f32>) -> f32 {
+    let e = hi - lo;
+    return unfused(e.x * e.y) + unfused(e.y * e.z) + unfused(e.z * e.x);
+}
+
+// The smallest biased exponent e (1..=253) with lo + 255·2^(e−127) ≥ hi.
+fn axis_exponent(lo: f32, hi: f32) -> u32 {
+    let bits = bitcast<u32>(hi - lo);
+    // extent = m·2^(E−127), m in [1, 2): 255·2^(E−134) = 1.99·2^(E−127) covers m ≤ 255/128.
+    var e = i32(bits >> 23u) - 7 + select(0, 1, (bits & 0x7fffffu) > 0x7f0000u);
+    e = clamp(e, 1, 253);
+    while e < 253 && lo + 255.0 * exponent_scale(u32(e)) < hi {
+        e++;
+    }
+    return u32(e);
+}
+
+fn quantize_lo(v: f32, origin: f32, e: u32) -> u32 {
+    let step = exponent_scale(e);
+    var q = u32(clamp(floor((v - origin) * exponent_scale(254u - e)), 0.0, 255.0));
+    while q > 0u && origin + f32(q) * step > v {
+        q--;
+    }
+    return q;
+}
+
+fn quantize_hi(v: f32, origin: f32, e: u32) -> u32 {
+    let step = exponent_scale(e);
+    var q = u32(clamp(ceil((v - origin) * exponent_scale(254u - e)), 0.0, 255.0));
+    while q < 255u && origin + f32(q) * step < v {
+        q++;
+    }
+    return q;
+}
+
+// `bytes` with `value` or-ed into byte `slot`.
+fn with_byte(bytes: vec2<u32>, slot: u32, value: u32) -> vec2<u32> {
+    let shifted = value << ((slot & 3u) * 8u);
+    return bytes | select(vec2<u32>(shifted, 0u), vec2<u32>(0u, shifted), slot >= 4u);
+}
+
+// Writes wide node `w` from binary node `source`; returns how many internal children it
+// allocated (their sources written) after `*base`.
+fn emit_wide_node(w: u32, source: u32, base: ptr<function, u32>) -> u32 {
+    var child: array<BvhNode, 8>;
+    var child_index: array<u32, 8>;
+    var count = 0u;
+    let top = nodes[source];
+    if (top.right_or_count & LEAF_FLAG) != 0u {
+        // A tree of one leaf.
+        child[0] = top;
+        child_index[0] = source;
+        count = 1u;
+    } else {
+        child_index[0] = top.left_or_first;
+        child_index[1] = top.right_or_count;
+        child[0] = nodes[top.left_or_first];
+        child[1] = nodes[top.right_or_count];
+        count = 2u;
+    }
+    loop {
+        if count == 8u {
+            break;
+        }
+        var widest = 8u;
+        var widest_area = -1.0;
+        for (var j = 0u; j < count; j++) {
+            if (child[j].right_or_count & LEAF_FLAG) == 0u {
+                let a = half_area(child[j].min, child[j].max);
+                if a > widest_area {
+                    widest = j;
+                    widest_area = a;
+                }
+            }
+        }
+        if widest == 8u {
+            break;
+        }
+        let opened = child[widest];
+        child_index[widest] = opened.left_or_first;
+        child_index[count] = opened.right_or_count;
+        child[widest] = nodes[opened.left_or_first];
+        child[count] = nodes[opened.right_or_count];
+        count++;
+    }
+
+    var lo = child[0].min;
+    var hi = child[0].max;
+    for (var j = 1u; j < count; j++) {
+        lo = min(lo, child[j].min);
+        hi = max(hi, child[j].max);
+    }
+    let centre = lo + hi;
+
+    // Octant slots, best (child, slot) pair first.
+    var slot_of: array<u32, 8>;
+    var free_slots = 0xffu;
+    var placed = 0u;
+    for (var round = 0u; round < count; round++) {
+        var best_score = -3.4e38;
+        var best_child = 0u;
+        var best_slot = 0u;
+        for (var j = 0u; j < count; j++) {
+            if ((placed >> j) & 1u) != 0u {
+                continue;
+            }
+            let d = (child[j].min + child[j].max) - centre;
+            for (var s = 0u; s < 8u; s++) {
+                if ((free_slots >> s) & 1u) == 0u {
+                    continue;
+                }
+                let score = select(-d.x, d.x, (s & 1u) != 0u) + select(-d.y, d.y, (s & 2u) != 0u) + select(-d.z, d.z, (s & 4u) != 0u);
+                if score > best_score {
+                    best_score = score;
+                    best_child = j;
+                    best_slot = s;
+                }
+            }
+        }
+        slot_of[best_child] = best_slot;
+        placed |= 1u << best_child;
+        free_slots &= ~(1u << best_slot);
+    }
+    var in_slot = array<u32, 8>(8u, 8u, 8u, 8u, 8u, 8u, 8u, 8u);
+    for (var j = 0u; j < count; j++) {
+        in_slot[slot_of[j]] = j;
+    }
+
+    let e = vec3<u32>(axis_exponent(lo.x, hi.x), axis_exponent(lo.y, hi.y), axis_exponent(lo.z, hi.z));
+    var out: WideNode;
+    out.origin = lo;
+    var imask = 0u;
+    var internal = 0u;
+    var prims = 0u;
+    for (var s = 0u; s < 8u; s++) {
+        let j = in_slot[s];
+        if j == 8u {
+            continue;
+        }
+        let c = child[j];
+        out.lo_x = with_byte(out.lo_x, s, quantize_lo(c.min.x, lo.x, e.x));
+        out.lo_y = with_byte(out.lo_y, s, quantize_lo(c.min.y, lo.y, e.y));
+        out.lo_z = with_byte(out.lo_z, s, quantize_lo(c.min.z, lo.z, e.z));
+        out.hi_x = with_byte(out.hi_x, s, quantize_hi(c.max.x, lo.x, e.x));
+        out.hi_y = with_byte(out.hi_y, s, quantize_hi(c.max.y, lo.y, e.y));
+        out.hi_z = with_byte(out.hi_z, s, quantize_hi(c.max.z, lo.z, e.z));
+        if (c.right_or_count & LEAF_FLAG) != 0u {
+            let n = c.right_or_count & ~LEAF_FLAG;
+            out.leaf_counts = with_byte(out.leaf_counts, s, n);
+            prims += n;
+        } else {
+            imask |= 1u << s;
+            internal++;
+        }
+    }
+    out.exponents = e.x | (e.y << 8u) | (e.z << 16u) | (imask << 24u);
+    out.prim_base = 0u;
+    if prims > 0u {
+        out.prim_base = atomicAdd(&wide_counters[1], prims);
+    }
+    out.child_base = 0u;
+    if internal > 0u {
+        out.child_base = atomicAdd(&wide_counters[0], internal);
+        if out.child_base + internal > params.capacity {
+            atomicAdd(&wide_counters[2], 1u);
+            return 0u;
+        }
+    }
+    var next_prim = out.prim_base;
+    var next_child = out.child_base;
+    for (var s = 0u; s < 8u; s++) {
+        let j = in_slot[s];
+        if j == 8u {
+            continue;
+        }
+        let c = child[j];
+        if (c.right_or_count & LEAF_FLAG) != 0u {
+            let first = c.left_or_first;
+            let n = c.right_or_count & ~LEAF_FLAG;
+            for (var i = 0u; i < n; i++) {
+                wide_prims[next_prim + i] = prim_indices[first + i];
+            }
+            next_prim += n;
+        } else {
+            wide_sources[next_child] = child_index[j];
+            next_child++;
+        }
+    }
+    wide_nodes[w] = out;
+    *base = out.child_base;
+    return internal;
+}

@@ -1,0 +1,32 @@
+// The levels of the binary-to-wide conversion after the last level dispatch, in one workgroup
+// (bound with the record of level level_dispatches + 1 as `this_level`): it emits the wide
+// nodes from the first one no level dispatch reached to the current end of the allocation, then
+// the nodes those allocated, and so on until no level adds any (a barrier between levels orders
+// the sources). Deep, narrow tails of the tree cost one wave per level here instead of one
+// dispatch each.
+#include "wide_collapse.wgsl"
+
+const FINISH_WORKGROUP: u32 = 256u;
+
+var<workgroup> level_end: u32;
+
+@compute @workgroup_size(256)
+fn main(@builtin(local_invocation_index) lid: u32) {
+    var first = this_level[record_word(params.level_dispatches + 1u, 3u)];
+    loop {
+        if lid == 0u {
+            // An overflow (capacity too small) ends the conversion.
+            level_end = select(atomicLoad(&wide_counters[0]), 0u, atomicLoad(&wide_counters[2]) != 0u);
+        }
+        let end = workgroupUniformLoad(&level_end);
+        if first >= end {
+            break;
+        }
+        for (var w = first + lid; w < end; w += FINISH_WORKGROUP) {
+            var base = 0u;
+            emit_wide_node(w, wide_sources[w], &base);
+        }
+        storageBarrier();
+        first = end;
+    }
+}

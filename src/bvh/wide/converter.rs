@@ -1,0 +1,111 @@
+//! The GPU binary-to-wide conversion, a build stage (pass "wide"): top-down, one wide node per
+//! invocation (`shaders/include/wide_collapse.wgsl`, CPU twin `WideBvh::from_binary`). The root
+//! is one direct dispatch; each of the next `level_dispatches` levels is an indirect dispatch
+//! whose size the previous level wrote (`wide_nodes_emit`); whatever lies deeper is emitted by
+//! one workgroup, level after level (`wide_nodes_finish`). No CPU round trip.
+
+use super::wide_nodes_emit::{WideParams, WIDE_NODES_EMIT};
+use super::wide_nodes_finish::WIDE_NODES_FINISH;
+use crate::bvh::BvhNode;
+use crate::device::{Tree, WideTree};
+use crate::gpu::GpuContext;
+use crate::gpu::{Grid, Kernel, Recorder};
+use crate::Result;
+
+/// Level dispatches a conversion records at most.
+pub const MAX_WIDE_LEVEL_DISPATCHES: u32 = 32;
+/// Words per level record (`RECORD_WORDS` in wide_collapse.wgsl).
+const RECORD_WORDS: u32 = 8;
+
+pub struct WideConverter {
+    emit: Kernel<WideParams>,
+    finish: Kernel<WideParams>,
+    forced_level_dispatches: Option<u32>,
+}
+
+impl WideConverter {
+    pub fn new(ctx: &GpuContext) -> Self {
+        Self {
+            emit: Kernel::new(ctx, &WIDE_NODES_EMIT),
+            finish: Kernel::new(ctx, &WIDE_NODES_FINISH),
+            forced_level_dispatches: None,
+        }
+    }
+
+    /// Level dispatches for a tree of up to `prims` references: the levels where most wide
+    /// nodes lie (log8 of the leaves, and a few more for unbalanced trees).
+    pub fn level_dispatches(prims: u32) -> u32 {
+        (prims.max(1).ilog2() / 3 + 4).min(MAX_WIDE_LEVEL_DISPATCHES)
+    }
+
+    /// Fixes the number of level dispatches (tests: every schedule gives the same tree); `None`
+    /// restores the default.
+    pub fn set_level_dispatches(&mut self, dispatches: Option<u32>) {
+        self.forced_level_dispatches = dispatches.map(|d| d.min(MAX_WIDE_LEVEL_DISPATCHES));
+    }
+
+    /// Records the conversion of `tree`'s binary tree into `tree.wide` (created or grown to the
+    /// capacity of the binary buffers).
+    pub fn record(&self, rec: &mut Recorder<'_>, tree: &mut Tree) -> Result<()> {
+        let ctx = rec.ctx;
+        let binary_nodes = (tree.nodes.size() / std::mem::size_of::<BvhNode>() as u64) as u32;
+        let prims = (tree.prim_indices.size() / 4) as u32;
+        // A binary tree of n nodes has (n − 1) / 2 internal nodes, each the source of one wide
+        // node at most (and a single leaf makes one).
+        let capacity = (binary_nodes / 2).max(1);
+        let level_dispatches = self
+            .forced_level_dispatches
+            .unwrap_or_else(|| Self::level_dispatches(prims));
+        let record_bytes = u64::from(RECORD_WORDS * (MAX_WIDE_LEVEL_DISPATCHES + 2)) * 4;
+        let fits = tree.wide.as_ref().is_some_and(|w| {
+            w.capacity >= capacity && w.prim_indices.size() >= u64::from(prims) * 4
+        });
+        if !fits {
+            tree.wide = Some(WideTree::new(ctx, capacity, prims, record_bytes)?);
+        }
+        let wide = tree.wide.as_ref().expect("created above");
+        rec.encoder().clear_buffer(&wide.counters, 0, None);
+        for records in &wide.records {
+            rec.encoder().clear_buffer(records, 0, None);
+        }
+        // Level L reads its record from records[L % 2] and writes the next into the other.
+        let buffers = |level: u32| -> [&wgpu::Buffer; 8] {
+            [
+                &tree.nodes,
+                &tree.prim_indices,
+                &wide.nodes,
+                &wide.prim_indices,
+                &wide.sources,
+                &wide.counters,
+                &wide.records[(level % 2) as usize],
+                &wide.records[((level + 1) % 2) as usize],
+            ]
+        };
+        let params = |level| WideParams {
+            level,
+            level_dispatches,
+            capacity: wide.capacity,
+            zero: 0,
+        };
+        let mut pass = rec.pass("wide");
+        pass.dispatch(&self.emit, Grid::workgroups(1, 1), &params(0), &buffers(0));
+        for level in 1..=level_dispatches {
+            let offset = u64::from(RECORD_WORDS * level) * 4;
+            pass.dispatch_indirect(
+                &self.emit,
+                &wide.records[(level % 2) as usize],
+                offset,
+                &params(level),
+                &buffers(level),
+            );
+        }
+        let last = level_dispatches + 1;
+        pass.dispatch(
+            &self.finish,
+            Grid::workgroups(1, 1),
+            &params(last),
+            &buffers(last),
+        );
+        Ok(())
+    }
+}

@@ -1,0 +1,312 @@
+//! The compressed wide BVH (Ylitie, Karras & Laine 2017): the GPU conversion makes the same tree
+//! as its CPU twin from the same binary tree, for every builder and every level schedule; wide
+//! trees pass the validator (every reference once, slot boxes conservative), and the validator
+//! catches broken ones; closest and any hits through the wide layout equal brute force; the
+//! layout takes at most 0.7× the binary tree's bytes; files round-trip; misuse is an error.
+
+mod common;
+
+use common::{assert_hits_match, convert_wide, gpu, oracle_hits, random_soup, scene_of, test_rays};
+use treelet::bvh::treelet::TreeletSettings;
+use treelet::bvh::wide::{
+    validate_wide, validate_wide_with_references, Layout, Slot, WideBvh, WIDTH,
+};
+use treelet::bvh::{
+    build_sweep_sah, read_wide_bvh, write_wide_bvh, Builder, SahParams, TreeUpdater, UpdateMode,
+    ValidationError, DEFAULT_SPLIT_PERCENT,
+};
+use treelet::device::{Geometry, Tree};
+use treelet::geometry::Ray;
+use treelet::gpu::{ParamSlab, Recorder};
+use treelet::scene::{load_scene, Scene};
+use treelet::trace::{any_hits_wide, closest_hits, closest_hits_wide, PathTracer, RenderSettings};
+
+/// The tree as a sequence independent of node and reference-block numbering: each node's frame,
+/// counts and quantized boxes, then per slot its references or its subtree, depth first.
+fn canonical(wide: &WideBvh) -> Vec<u32> {
+    let mut out = Vec::new();
+    let mut stack = vec![0u32];
+    while let Some(index) = stack.pop() {
+        let node = &wide.nodes[index as usize];
+        out.extend(node.origin);
+        out.push(node.exponents);
+        out.extend(node.leaf_counts);
+        out.extend(node.quantized.iter().flatten());
+        let mut children = Vec::new();
+        for slot in 0..WIDTH {
+            match node.slot(slot) {
+                Slot::Empty => {}
+                Slot::Internal(child) => children.push(child),
+                Slot::Leaf { first, count } => out.extend_from_slice(
+                    &wide.prim_indices[first as usize..(first + count) as usize],
+                ),
+            }
+        }
+        stack.extend(children.iter().rev());
+    }
+    out
+}
+
+fn split_builder() -> Builder {
+    Builder::TrbvhSplit(TreeletSettings {
+        split_percent: DEFAULT_SPLIT_PERCENT,
+        ..TreeletSettings::BALANCED
+    })
+}
+
+/// Builds `scene` with `builder` and converts it with `level_dispatches` (None: the default).
+fn build_wide(scene: &Scene, builder: Builder, level_dispatches: Option<u32>) -> (Geometry, Tree) {
+    let geometry = Geometry::upload(gpu(), scene).unwrap();
+    let mut tree = Tree::empty(gpu()).unwrap();
+    let mut updater =
+        TreeUpdater::new(gpu(), UpdateMode::Rebuild(builder), &SahParams::default()).unwrap();
+    updater.set_layout(gpu(), Layout::Wide);
+    updater
+        .converter_mut()
+        .unwrap()
+        .set_level_dispatches(level_dispatches);
+    let mut slab = ParamSlab::new(gpu());
+    let mut rec = Recorder::new(gpu(), &mut slab, None);
+    updater
+        .record(&mut rec, &geometry, &scene.triangles, &mut tree)
+        .unwrap();
+    rec.submit();
+    (geometry, tree)
+}
+
+fn check_conversion(scene: &Scene, builder: Builder, level_dispatches: Option<u32>) -> WideBvh {
+    let (_, tree) = build_wide(scene, builder, level_dispatches);
+    let binary = tree.download(gpu()).unwrap();
+    let gpu_wide = tree.wide.as_ref().unwrap().download(gpu()).unwrap();
+    let cpu_wide = WideBvh::from_binary(&binary).unwrap();
+    let who = format!(
+        "{} on {} ({level_dispatches:?})",
+        builder.label(),
+        scene.name
+    );
+    assert_eq!(
+        gpu_wide.nodes.len(),
+        cpu_wide.nodes.len(),
+        "{who}: node count"
+    );
+    assert_eq!(
+        gpu_wide.prim_indices.len(),
+        binary.prim_indices.len(),
+        "{who}"
+    );
+    assert!(
+        canonical(&gpu_wide) == canonical(&cpu_wide),
+        "{who}: the GPU conversion differs from its CPU twin"
+    );
+    let validation = if builder.duplicates_references() {
+        validate_wide_with_references(&gpu_wide, &scene.triangles)
+    } else {
+        validate_wide(&gpu_wide, &scene.triangles)
+    };
+    validation.unwrap_or_else(|e| panic!("{who}: invalid wide tree: {e}"));
+    gpu_wide
+}
+
+#[test]
+fn gpu_conversion_equals_cpu_twin_for_every_builder() {
+    let scenes = [
+        scene_of(random_soup(3000, 11)),
+        load_scene("cornell").unwrap(),
+        load_scene("field-10k").unwrap(),
+        scene_of(random_soup(1, 3)),
+    ];
+    for scene in &scenes {
+        for builder in [
+            Builder::Lbvh,
+            Builder::Trbvh(TreeletSettings::BALANCED),
+            split_builder(),
+            Builder::Sweep,
+        ] {
+            check_conversion(scene, builder, None);
+        }
+    }
+}
+
+/// Every split of the levels between indirect dispatches and the one-workgroup finish gives the
+/// same tree: all levels in the finish (0), a few, and more dispatches than levels.
+#[test]
+fn every_level_schedule_gives_the_same_tree() {
+    let scene = load_scene("field-10k").unwrap();
+    let builder = Builder::Trbvh(TreeletSettings::BALANCED);
+    let reference = canonical(&check_conversion(&scene, builder, None));
+    for dispatches in [0, 1, 2, 32] {
+        let wide = check_conversion(&scene, builder, Some(dispatches));
+        assert!(
+            canonical(&wide) == reference,
+            "{dispatches} level dispatches"
+        );
+    }
+}
+
+#[test]
+fn wide_hits_equal_brute_force() {
+    let scenes = [
+        scene_of(random_soup(3000, 7)),
+        load_scene("cornell").unwrap(),
+        load_scene("field-10k").unwrap(),
+    ];
+    for (seed, scene) in scenes.iter().enumerate() {
+        let rays = test_rays(&scene.triangles, 300, seed as u64 + 20);
+        let plain: Vec<Ray> = rays.iter().map(|(_, r)| *r).collect();
+        let oracle = oracle_hits(&scene.triangles, &rays);
+        for builder in [Builder::Trbvh(TreeletSettings::BALANCED), split_builder()] {
+            let (geometry, tree) = build_wide(scene, builder, None);
+            let hits = closest_hits_wide(gpu(), &geometry, &tree, &plain).unwrap();
+            let ties = assert_hits_match(&scene.triangles, &rays, &hits);
+            let binary = closest_hits(gpu(), &geometry, &tree, &plain).unwrap();
+            let same_t = hits.iter().zip(&binary).filter(|(w, b)| w.t == b.t).count();
+            assert_eq!(
+                same_t,
+                rays.len(),
+                "{}: wide and binary distances",
+                scene.name
+            );
+            // Any hit: found exactly when the closest hit lies in the interval.
+            let any = any_hits_wide(gpu(), &geometry, &tree, &plain).unwrap();
+            for (i, (a, o)) in any.iter().zip(&oracle).enumerate() {
+                assert_eq!(a.is_hit(), o.is_hit(), "{} ray {i}: any hit", scene.name);
+                if a.is_hit() {
+                    assert!(a.t >= plain[i].t_min && a.t <= plain[i].t_max, "ray {i}");
+                }
+            }
+            println!("{} {}: {ties} ties", scene.name, builder.label());
+        }
+        // A CPU reference tree, uploaded and converted.
+        let bvh = build_sweep_sah(&scene.triangles, &SahParams::default());
+        let geometry = Geometry::upload(gpu(), scene).unwrap();
+        let mut tree = Tree::upload(gpu(), &bvh).unwrap();
+        convert_wide(&mut tree);
+        let hits = closest_hits_wide(gpu(), &geometry, &tree, &plain).unwrap();
+        assert_hits_match(&scene.triangles, &rays, &hits);
+    }
+}
+
+/// Wide nodes and references take at most 0.7× the bytes of the binary tree they come from.
+#[test]
+fn wide_layout_takes_less_memory() {
+    let scene = load_scene("field-10k").unwrap();
+    for builder in [Builder::Lbvh, Builder::Trbvh(TreeletSettings::BALANCED)] {
+        let (_, tree) = build_wide(&scene, builder, None);
+        let binary = tree.download(gpu()).unwrap();
+        let binary_bytes = binary.nodes.len() * 32 + binary.prim_indices.len() * 4;
+        let wide = tree.wide.as_ref().unwrap().download(gpu()).unwrap();
+        let ratio = wide.bytes() as f64 / binary_bytes as f64;
+        println!("{}: wide/binary bytes {ratio:.3}", builder.label());
+        assert!(ratio <= 0.7, "{}: {ratio}", builder.label());
+    }
+}
+
+#[test]
+fn validator_catches_broken_wide_trees() {
+    let scene = scene_of(random_soup(500, 5));
+    let bvh = build_sweep_sah(&scene.triangles, &SahParams::default());
+    let wide = WideBvh::from_binary(&bvh).unwrap();
+    validate_wide(&wide, &scene.triangles).unwrap();
+    assert!(wide.nodes.len() > 2, "a tree of several nodes");
+
+    // A slot box shrunk by one quantum no longer contains what lies beneath it.
+    let mut shrunk = wide.clone();
+    let hi_x = &mut shrunk.nodes[0].quantized[3];
+    let slot = (0..WIDTH)
+        .find(|&s| (hi_x[s / 4] >> (8 * (s % 4))) & 0xff > 0)
+        .unwrap();
+    hi_x[slot / 4] -= 1 << (8 * (slot % 4));
+    assert!(matches!(
+        validate_wide(&shrunk, &scene.triangles),
+        Err(ValidationError::SlotNotContaining { .. })
+    ));
+
+    // A reference dropped, a child pointer out of range, a bad exponent.
+    let mut dropped = wide.clone();
+    dropped.prim_indices.pop();
+    assert!(validate_wide(&dropped, &scene.triangles).is_err());
+    let mut dangling = wide.clone();
+    let internal = dangling.nodes.iter().position(|n| n.imask() != 0).unwrap();
+    dangling.nodes[internal].child_base = 1_000_000;
+    assert!(matches!(
+        validate_wide(&dangling, &scene.triangles),
+        Err(ValidationError::ChildOutOfRange { .. })
+    ));
+    let mut frame = wide.clone();
+    frame.nodes[0].exponents &= !0xff;
+    assert!(matches!(
+        validate_wide(&frame, &scene.triangles),
+        Err(ValidationError::BadQuantizationFrame { node: 0 })
+    ));
+}
+
+#[test]
+fn wide_files_round_trip() {
+    let scene = scene_of(random_soup(300, 9));
+    let bvh = build_sweep_sah(&scene.triangles, &SahParams::default());
+    let wide = WideBvh::from_binary(&bvh).unwrap();
+    let dir = std::env::temp_dir().join("treelet-wide-test");
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("tree.cwbvh");
+    write_wide_bvh(&path, &wide, 300).unwrap();
+    assert_eq!(read_wide_bvh(&path).unwrap(), (wide, 300));
+    // A binary-layout file is not a wide one, and a truncated file is refused.
+    treelet::bvh::write_bvh(&path, &bvh, 300).unwrap();
+    let e = read_wide_bvh(&path).unwrap_err().to_string();
+    assert!(
+        e.contains("not a treelet BVH file of the wide layout"),
+        "{e}"
+    );
+    std::fs::write(&path, &b"TRLTCWB1\x05\0\0\0"[..]).unwrap();
+    assert!(read_wide_bvh(&path).is_err());
+}
+
+#[test]
+fn tracing_the_wide_layout_needs_a_conversion() {
+    let scene = scene_of(random_soup(100, 1));
+    let bvh = build_sweep_sah(&scene.triangles, &SahParams::default());
+    let geometry = Geometry::upload(gpu(), &scene).unwrap();
+    let tree = Tree::upload(gpu(), &bvh).unwrap();
+    let settings = RenderSettings {
+        width: 8,
+        height: 8,
+        layout: Layout::Wide,
+        ..RenderSettings::default()
+    };
+    let mut tracer = PathTracer::new(gpu(), settings).unwrap();
+    let e = tracer
+        .trace(gpu(), &geometry, &tree, &scene.camera, scene.sky, 1)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("not converted"), "{e}");
+    let rays = [Ray::new(glam::Vec3::ZERO, glam::Vec3::X, 0.0, f32::MAX)];
+    assert!(closest_hits_wide(gpu(), &geometry, &tree, &rays).is_err());
+}
+
+#[test]
+fn leaves_too_large_for_the_layout_are_refused() {
+    let scene = scene_of(random_soup(400, 2));
+    let sah = SahParams {
+        max_leaf_size: 300,
+        ..SahParams::default()
+    };
+    let geometry = Geometry::upload(gpu(), &scene).unwrap();
+    let mut tree = Tree::empty(gpu()).unwrap();
+    let mut updater = TreeUpdater::new(gpu(), UpdateMode::Rebuild(Builder::Sweep), &sah).unwrap();
+    updater.set_layout(gpu(), Layout::Wide);
+    let mut slab = ParamSlab::new(gpu());
+    let mut rec = Recorder::new(gpu(), &mut slab, None);
+    let e = updater
+        .record(&mut rec, &geometry, &scene.triangles, &mut tree)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("do not fit the wide layout"), "{e}");
+    // The CPU twin refuses a leaf of more than 255 references too.
+    let mut bvh = build_sweep_sah(&scene.triangles, &SahParams::default());
+    bvh.nodes = vec![treelet::bvh::BvhNode::leaf(
+        bvh.nodes[0].bounds(),
+        0,
+        bvh.prim_indices.len() as u32,
+    )];
+    assert!(WideBvh::from_binary(&bvh).is_err());
+}
