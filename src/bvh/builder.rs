@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use super::treelet::TreeletSettings;
 use super::update::{TreeUpdater, UpdateMode};
-use super::wide::{Layout, WideConverter, MAX_WIDE_LEAF_SIZE};
+use super::wide::{check_leaf_sizes, Layout, WideConverter};
 use super::{build_sbvh, build_sweep_sah, Bvh, SahParams};
 use crate::device::{Geometry, Tree};
 use crate::gpu::{GpuContext, GpuTimer, ParamSlab, Recorder, StageTime, Timing, Warmup};
@@ -222,16 +222,7 @@ fn cpu_build(
         ms: Some(cpu_ms),
     }];
     if layout == Layout::Wide {
-        if let Some(n) = bvh
-            .nodes
-            .iter()
-            .find(|n| n.prim_count() > MAX_WIDE_LEAF_SIZE)
-        {
-            return Err(Error::InvalidArgument(format!(
-                "a leaf of {} triangles does not fit the wide layout (at most {MAX_WIDE_LEAF_SIZE}): lower --max-leaf-size",
-                n.prim_count()
-            )));
-        }
+        check_leaf_sizes(&bvh)?;
         let mut timer = GpuTimer::new(ctx, 1);
         let mut slab = ParamSlab::new(ctx);
         let mut rec = Recorder::new(ctx, &mut slab, Some(&mut timer));

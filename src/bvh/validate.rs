@@ -109,6 +109,99 @@ pub(crate) enum References {
     Multiple,
 }
 
+/// The reference checks both layouts' validators share (this module and `wide::validate`): each
+/// leaf's range lies inside `prim_indices`, every entry is used by one leaf, triangle ids are in
+/// range, each triangle is referenced once (or at most once per leaf) and lies in (or overlaps)
+/// its leaf's box; at the end, no entry is unused and no triangle unreferenced.
+pub(crate) struct ReferenceLedger<'a> {
+    prim_indices: &'a [u32],
+    triangles: &'a [Triangle],
+    mode: References,
+    entry_used: Vec<bool>,
+    /// The last leaf that referenced each triangle.
+    triangle_leaf: Vec<usize>,
+}
+
+impl<'a> ReferenceLedger<'a> {
+    pub fn new(prim_indices: &'a [u32], triangles: &'a [Triangle], mode: References) -> Self {
+        Self {
+            prim_indices,
+            triangles,
+            mode,
+            entry_used: vec![false; prim_indices.len()],
+            triangle_leaf: vec![usize::MAX; triangles.len()],
+        }
+    }
+
+    /// Checks the leaf `leaf` (an id no other leaf has) of node `node`: `count` entries from
+    /// `first`, in a leaf box `bounds`; `misfit(triangle)` is the error for a triangle the box does
+    /// not contain (single mode) or overlap (multiple mode).
+    pub fn leaf(
+        &mut self,
+        node: usize,
+        leaf: usize,
+        (first, count): (usize, usize),
+        bounds: &Aabb,
+        misfit: impl Fn(usize) -> ValidationError,
+    ) -> Result<(), ValidationError> {
+        let len = self.prim_indices.len();
+        if first > len || count > len - first {
+            return Err(ValidationError::LeafRangeOutOfBounds {
+                node,
+                first,
+                count,
+                len,
+            });
+        }
+        for entry in first..first + count {
+            if std::mem::replace(&mut self.entry_used[entry], true) {
+                return Err(ValidationError::EntrySharedByLeaves { node, entry });
+            }
+            let triangle = self.prim_indices[entry] as usize;
+            if triangle >= self.triangles.len() {
+                return Err(ValidationError::TriangleOutOfRange {
+                    node,
+                    entry,
+                    triangle,
+                    triangle_count: self.triangles.len(),
+                });
+            }
+            let previous = std::mem::replace(&mut self.triangle_leaf[triangle], leaf);
+            let tri_bounds = self.triangles[triangle].bounds();
+            let fits = match self.mode {
+                References::Single if previous != usize::MAX => {
+                    return Err(ValidationError::TriangleReferencedTwice { node, triangle })
+                }
+                References::Multiple if previous == leaf => {
+                    return Err(ValidationError::TriangleTwiceInLeaf { node, triangle })
+                }
+                References::Single => bounds.contains(&tri_bounds, 0.0),
+                References::Multiple => overlaps(bounds, &tri_bounds),
+            };
+            if !fits {
+                return Err(misfit(triangle));
+            }
+        }
+        Ok(())
+    }
+
+    /// After every leaf: no entry unused, no triangle unreferenced.
+    pub fn finish(&self) -> Result<(), ValidationError> {
+        if let Some(entry) = self.entry_used.iter().position(|&used| !used) {
+            return Err(ValidationError::UnusedEntry { entry });
+        }
+        if let Some(triangle) = self.triangle_leaf.iter().position(|&l| l == usize::MAX) {
+            return Err(ValidationError::TriangleMissing { triangle });
+        }
+        Ok(())
+    }
+}
+
+/// Whether two boxes share a point.
+pub(crate) fn overlaps(a: &Aabb, b: &Aabb) -> bool {
+    a.min.cmple(b.max).all() && b.min.cmple(a.max).all()
+}
+
 fn has_nan(b: &Aabb) -> bool {
     b.min.is_nan() || b.max.is_nan()
 }
@@ -139,9 +232,7 @@ fn validate_mode(
         return Err(ValidationError::Empty);
     }
     let mut node_seen = vec![false; nodes.len()];
-    let mut entry_used = vec![false; bvh.prim_indices.len()];
-    // The last leaf that referenced each triangle.
-    let mut triangle_leaf = vec![usize::MAX; triangles.len()];
+    let mut references = ReferenceLedger::new(&bvh.prim_indices, triangles, mode);
     let mut stats = ValidationStats {
         nodes: nodes.len(),
         leaves: 0,
@@ -165,64 +256,17 @@ fn validate_mode(
             if count == 0 {
                 return Err(ValidationError::EmptyLeaf { node: index });
             }
-            let len = bvh.prim_indices.len();
-            if first > len || count > len - first {
-                return Err(ValidationError::LeafRangeOutOfBounds {
+            let misfit = |triangle| match mode {
+                References::Single => ValidationError::TriangleNotContained {
                     node: index,
-                    first,
-                    count,
-                    len,
-                });
-            }
-            for (offset, &triangle) in bvh.prim_indices[first..first + count].iter().enumerate() {
-                let entry = first + offset;
-                if std::mem::replace(&mut entry_used[entry], true) {
-                    return Err(ValidationError::EntrySharedByLeaves { node: index, entry });
-                }
-                let triangle = triangle as usize;
-                if triangle >= triangles.len() {
-                    return Err(ValidationError::TriangleOutOfRange {
-                        node: index,
-                        entry,
-                        triangle,
-                        triangle_count: triangles.len(),
-                    });
-                }
-                let previous = std::mem::replace(&mut triangle_leaf[triangle], index);
-                let tri_bounds = triangles[triangle].bounds();
-                match mode {
-                    References::Single => {
-                        if previous != usize::MAX {
-                            return Err(ValidationError::TriangleReferencedTwice {
-                                node: index,
-                                triangle,
-                            });
-                        }
-                        if !bounds.contains(&tri_bounds, 0.0) {
-                            return Err(ValidationError::TriangleNotContained {
-                                node: index,
-                                triangle,
-                            });
-                        }
-                    }
-                    References::Multiple => {
-                        if previous == index {
-                            return Err(ValidationError::TriangleTwiceInLeaf {
-                                node: index,
-                                triangle,
-                            });
-                        }
-                        let overlaps = bounds.min.cmple(tri_bounds.max).all()
-                            && tri_bounds.min.cmple(bounds.max).all();
-                        if !overlaps {
-                            return Err(ValidationError::TriangleNotOverlapped {
-                                node: index,
-                                triangle,
-                            });
-                        }
-                    }
-                }
-            }
+                    triangle,
+                },
+                References::Multiple => ValidationError::TriangleNotOverlapped {
+                    node: index,
+                    triangle,
+                },
+            };
+            references.leaf(index, index, (first, count), &bounds, misfit)?;
             stats.leaves += 1;
             stats.max_leaf_size = stats.max_leaf_size.max(count);
         } else {
@@ -253,12 +297,7 @@ fn validate_mode(
     if let Some(node) = node_seen.iter().position(|&seen| !seen) {
         return Err(ValidationError::UnreachableNode { node });
     }
-    if let Some(entry) = entry_used.iter().position(|&used| !used) {
-        return Err(ValidationError::UnusedEntry { entry });
-    }
-    if let Some(triangle) = triangle_leaf.iter().position(|&leaf| leaf == usize::MAX) {
-        return Err(ValidationError::TriangleMissing { triangle });
-    }
+    references.finish()?;
     Ok(stats)
 }
 

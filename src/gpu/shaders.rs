@@ -66,6 +66,10 @@ const INCLUDES: &[(&str, &str)] = &[
         include_str!("../../shaders/include/wide_collapse.wgsl"),
     ),
     (
+        "ray_queries.wgsl",
+        include_str!("../../shaders/include/ray_queries.wgsl"),
+    ),
+    (
         "path_integrator.wgsl",
         include_str!("../../shaders/include/path_integrator.wgsl"),
     ),

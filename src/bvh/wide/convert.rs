@@ -22,6 +22,18 @@ use crate::{Error, Result};
 /// The largest leaf a wide node can hold (its count is a byte).
 pub const MAX_WIDE_LEAF_SIZE: u32 = 255;
 
+/// Fails when a leaf of `bvh` holds more than [`MAX_WIDE_LEAF_SIZE`] references (a wide node
+/// counts a leaf's references in a byte).
+pub fn check_leaf_sizes(bvh: &Bvh) -> Result<()> {
+    match bvh.nodes.iter().find(|n| n.prim_count() > MAX_WIDE_LEAF_SIZE) {
+        Some(n) => Err(Error::InvalidArgument(format!(
+            "a leaf of {} references does not fit the wide layout (at most {MAX_WIDE_LEAF_SIZE}; lower --max-leaf-size)",
+            n.prim_count()
+        ))),
+        None => Ok(()),
+    }
+}
+
 fn half_area(n: &BvhNode) -> f32 {
     let e: [f32; 3] = std::array::from_fn(|a| n.max[a] - n.min[a]);
     e[0] * e[1] + e[1] * e[2] + e[2] * e[0]
@@ -125,16 +137,7 @@ impl WideBvh {
                 "cannot convert an empty tree".into(),
             ));
         }
-        if let Some(n) = bvh
-            .nodes
-            .iter()
-            .find(|n| n.prim_count() > MAX_WIDE_LEAF_SIZE)
-        {
-            return Err(Error::InvalidArgument(format!(
-                "a leaf of {} references does not fit the wide layout (at most {MAX_WIDE_LEAF_SIZE})",
-                n.prim_count()
-            )));
-        }
+        check_leaf_sizes(bvh)?;
         let mut wide = WideBvh {
             nodes: vec![WideNode::default()],
             prim_indices: Vec::with_capacity(bvh.prim_indices.len()),

@@ -13,11 +13,6 @@
 use super::node::WIDTH;
 use crate::bvh::{Bvh, BvhNode, SahParams};
 
-fn area(n: &BvhNode) -> f64 {
-    let e: [f64; 3] = std::array::from_fn(|a| f64::from(n.max[a] - n.min[a]));
-    2.0 * (e[0] * e[1] + e[1] * e[2] + e[2] * e[0])
-}
-
 /// Nodes reachable from the root, children after parents.
 fn top_down(bvh: &Bvh) -> Vec<usize> {
     let mut order = Vec::with_capacity(bvh.nodes.len());
@@ -34,11 +29,20 @@ fn top_down(bvh: &Bvh) -> Vec<usize> {
 }
 
 /// (greedy, optimal) wide SAH of `bvh` converted by `WideBvh::from_binary` and by the optimal
-/// collapse. An empty tree costs 0.
+/// collapse. An empty tree costs 0; a root of zero area takes every area as 1, as `sah_cost` does.
 pub fn wide_sah_costs(bvh: &Bvh, params: &SahParams) -> (f64, f64) {
-    if bvh.nodes.is_empty() {
+    let Some(root) = bvh.nodes.first() else {
         return (0.0, 0.0);
-    }
+    };
+    let root_area = root.bounds().surface_area();
+    let degenerate = !(root_area > 0.0 && root_area.is_finite());
+    let area = |n: &BvhNode| {
+        if degenerate {
+            1.0
+        } else {
+            f64::from(n.bounds().surface_area()) / f64::from(root_area)
+        }
+    };
     let (ci, ct) = (f64::from(params.ci), f64::from(params.ct));
     let order = top_down(bvh);
     let leaf_cost = |n: &BvhNode| ct * area(n) * f64::from(n.prim_count());
@@ -92,8 +96,7 @@ pub fn wide_sah_costs(bvh: &Bvh, params: &SahParams) -> (f64, f64) {
     while let Some(source) = stack.pop() {
         greedy += greedy_node(source, &mut stack);
     }
-    let root_area = area(&bvh.nodes[0]).max(f64::MIN_POSITIVE);
-    (greedy / root_area, optimal / root_area)
+    (greedy, optimal)
 }
 
 #[cfg(test)]

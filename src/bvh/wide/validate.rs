@@ -10,7 +10,7 @@
 //! the child's origin and overlaps every box of the child's own slots).
 
 use super::node::{Slot, WideBvh, WIDTH};
-use crate::bvh::validate::References;
+use crate::bvh::validate::{overlaps, ReferenceLedger, References};
 use crate::bvh::{ValidationError, ValidationStats};
 use crate::geometry::Aabb;
 use crate::scene::Triangle;
@@ -31,10 +31,6 @@ pub fn validate_wide_with_references(
     validate_mode(wide, triangles, References::Multiple)
 }
 
-fn overlaps(a: &Aabb, b: &Aabb) -> bool {
-    a.min.cmple(b.max).all() && b.min.cmple(a.max).all()
-}
-
 fn validate_mode(
     wide: &WideBvh,
     triangles: &[Triangle],
@@ -51,8 +47,7 @@ fn validate_mode(
         max_leaf_size: 0,
     };
     let mut seen = vec![false; nodes.len()];
-    let mut entry_used = vec![false; wide.prim_indices.len()];
-    let mut triangle_leaf = vec![usize::MAX; triangles.len()];
+    let mut references = ReferenceLedger::new(&wide.prim_indices, triangles, mode);
     let mut leaf_id = 0usize;
     // Nodes in the order reached (parents before children), for the bottom-up box check.
     let mut order = Vec::with_capacity(nodes.len());
@@ -89,58 +84,16 @@ fn validate_mode(
                     children += 1;
                     leaf_id += 1;
                     let (first, count) = (first as usize, count as usize);
-                    let len = wide.prim_indices.len();
-                    if first > len || count > len - first {
-                        return Err(ValidationError::LeafRangeOutOfBounds {
-                            node: index,
-                            first,
-                            count,
-                            len,
-                        });
-                    }
+                    let misfit = |_| ValidationError::SlotNotContaining { node: index, slot };
+                    references.leaf(
+                        index,
+                        leaf_id,
+                        (first, count),
+                        &node.slot_box(slot),
+                        misfit,
+                    )?;
                     stats.leaves += 1;
                     stats.max_leaf_size = stats.max_leaf_size.max(count);
-                    let slot_box = node.slot_box(slot);
-                    let entries = wide.prim_indices[first..first + count].iter();
-                    let used = entry_used[first..first + count].iter_mut();
-                    for (entry, (&triangle, used)) in (first..).zip(entries.zip(used)) {
-                        if std::mem::replace(used, true) {
-                            return Err(ValidationError::EntrySharedByLeaves {
-                                node: index,
-                                entry,
-                            });
-                        }
-                        let triangle = triangle as usize;
-                        if triangle >= triangles.len() {
-                            return Err(ValidationError::TriangleOutOfRange {
-                                node: index,
-                                entry,
-                                triangle,
-                                triangle_count: triangles.len(),
-                            });
-                        }
-                        let previous = std::mem::replace(&mut triangle_leaf[triangle], leaf_id);
-                        let tri_bounds = triangles[triangle].bounds();
-                        let fits = match mode {
-                            References::Single if previous != usize::MAX => {
-                                return Err(ValidationError::TriangleReferencedTwice {
-                                    node: index,
-                                    triangle,
-                                })
-                            }
-                            References::Multiple if previous == leaf_id => {
-                                return Err(ValidationError::TriangleTwiceInLeaf {
-                                    node: index,
-                                    triangle,
-                                })
-                            }
-                            References::Single => slot_box.contains(&tri_bounds, 0.0),
-                            References::Multiple => overlaps(&slot_box, &tri_bounds),
-                        };
-                        if !fits {
-                            return Err(ValidationError::SlotNotContaining { node: index, slot });
-                        }
-                    }
                 }
             }
         }
@@ -151,12 +104,7 @@ fn validate_mode(
     if let Some(node) = seen.iter().position(|&s| !s) {
         return Err(ValidationError::UnreachableNode { node });
     }
-    if let Some(entry) = entry_used.iter().position(|&u| !u) {
-        return Err(ValidationError::UnusedEntry { entry });
-    }
-    if let Some(triangle) = triangle_leaf.iter().position(|&l| l == usize::MAX) {
-        return Err(ValidationError::TriangleMissing { triangle });
-    }
+    references.finish()?;
     check_internal_boxes(wide, triangles, mode, &order)?;
     Ok(stats)
 }

@@ -1,0 +1,30 @@
+// Batched ray queries, the body of the query kernels (rays_intersect.wgsl: binary BVH,
+// rays_intersect_wide.wgsl: wide BVH), which declare the bindings and include their traversal
+// (`traverse`) before this file: one invocation per ray, its closest hit (or any hit) written per
+// ray. Used by tests (against CPU brute force) and by anyone who needs batched ray queries.
+
+struct QueryParams {
+    ray_count: u32,
+    row_pitch: u32,
+    // Always 0 (see `opaque` in ray_triangle.wgsl).
+    opaque_zero: u32,
+    // 1: any hit in the interval, 0: the closest hit.
+    any_hit: u32,
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x + gid.y * params.row_pitch;
+    if i >= params.ray_count {
+        return;
+    }
+    let ray = rays[i];
+    let result = traverse(ray.origin, ray.dir, ray.t_min, ray.t_max, params.opaque_zero, params.any_hit != 0u);
+    if result.overflow != 0u {
+        atomicAdd(&counters[0], 1u);
+    }
+    hits[i] = result.hit;
+    if result.hit.tri == MISS {
+        hits[i].t = 3.0e38;
+    }
+}
