@@ -26,8 +26,8 @@ fn main(
         return;
     }
     let add = sums[block];
-    let base = block * SCAN_BLOCK + lid * 4u;
-    for (var i = 0u; i < 4u; i++) {
+    let base = block * SCAN_BLOCK + lid * (SCAN_BLOCK / 256u);
+    for (var i = 0u; i < SCAN_BLOCK / 256u; i++) {
         if base + i < params.len {
             data[base + i] += add;
         }

@@ -1,6 +1,7 @@
 // Exclusive prefix sum, one level of the multi-level scan of `sort::RadixSort` (reduce-then-scan
-// step 2): each workgroup scans its block of SCAN_BLOCK = 1024 u32s of `data` in place (4 consecutive
-// per invocation, then a Hillis-Steele scan of the 256 invocation totals in workgroup memory) and
+// step 2): each workgroup scans its block of SCAN_BLOCK = 4096 u32s of `data` in place (16
+// consecutive per invocation, then a Hillis-Steele scan of the 256 invocation totals in workgroup
+// memory) and
 // writes the block's total to sums[block]. The caller scans `sums` the same way (the next level,
 // its own dispatch) and adds it back with counts_add.wgsl; a length of at most SCAN_BLOCK needs this
 // one dispatch only.
@@ -8,6 +9,7 @@
 #include "constants.wgsl"
 
 const WORKGROUP: u32 = 256u;
+const ITEMS: u32 = SCAN_BLOCK / WORKGROUP;
 
 struct ScanParams {
     len: u32,
@@ -45,9 +47,11 @@ fn main(
     if block >= params.num_blocks {
         return;
     }
-    let base = block * SCAN_BLOCK + lid * 4u;
-    let x = vec4<u32>(load(base), load(base + 1u), load(base + 2u), load(base + 3u));
-    let total = x.x + x.y + x.z + x.w;
+    let base = block * SCAN_BLOCK + lid * ITEMS;
+    var total = 0u;
+    for (var i = 0u; i < ITEMS; i++) {
+        total += load(base + i);
+    }
     partial[lid] = total;
     workgroupBarrier();
     for (var offset = 1u; offset < WORKGROUP; offset <<= 1u) {
@@ -59,11 +63,12 @@ fn main(
         partial[lid] = t;
         workgroupBarrier();
     }
-    let before = partial[lid] - total;
-    store(base, before);
-    store(base + 1u, before + x.x);
-    store(base + 2u, before + x.x + x.y);
-    store(base + 3u, before + x.x + x.y + x.z);
+    var before = partial[lid] - total;
+    for (var i = 0u; i < ITEMS; i++) {
+        let x = load(base + i);
+        store(base + i, before);
+        before += x;
+    }
     if lid == WORKGROUP - 1u {
         sums[block] = partial[lid];
     }

@@ -1,7 +1,9 @@
-// 63-bit Morton keys (21 bits per axis) of primitive box centroids normalized to the scene's
-// centroid bounds (LBVH stage 2, Karras 2012 §4), and the identity permutation as sort values.
-// The grid is cubic (cell size from the longest side), so thin axes do not waste top-level splits.
-// Keys are vec2<u32>(low 32 bits, high 32 bits); bit 3k+2 holds x's bit k, 3k+1 y's, 3k z's.
+// 48-bit Morton keys of primitive box centroids normalized to the scene's centroid bounds (LBVH
+// stage 2, Karras 2012 §4), and the identity permutation as sort values. Centroids are quantized on
+// a grid of MORTON_GRID (2^21) cells per axis, of which the keys keep the high MORTON_AXIS_BITS (16)
+// bits per axis. The grid is cubic (cell size from the longest side), so thin axes do not waste
+// top-level splits. Keys are vec2<u32>(low 32 bits, high 32 bits); bit 3k+2 holds x's kept bit k,
+// 3k+1 y's, 3k z's.
 #include "constants.wgsl"
 #include "aabb.wgsl"
 #include "items.wgsl"
@@ -15,6 +17,9 @@
 // The item count's limit (`gpu::ItemCount`): the kernel works on min(params.count, count_limit[0]).
 @group(0) @binding(5) var<storage, read> count_limit: array<u32>;
 
+// Grid bits per axis below the kept ones.
+const DROPPED_BITS: u32 = 21u - MORTON_AXIS_BITS;
+
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x + gid.y * params.row_pitch;
@@ -26,9 +31,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let e = bounds.max - bounds.min;
     let extent = max(e.x, max(e.y, e.z));
     let scale = select(0.0, MORTON_GRID / extent, extent > 0.0);
-    let q = vec3<u32>(clamp((c - bounds.min) * scale, vec3<f32>(0.0), vec3<f32>(MORTON_GRID_MAX)));
+    let q = vec3<u32>(clamp((c - bounds.min) * scale, vec3<f32>(0.0), vec3<f32>(MORTON_GRID_MAX))) >> vec3<u32>(DROPPED_BITS);
     var key = vec2<u32>(0u);
-    for (var bit = 0u; bit < 21u; bit++) {
+    for (var bit = 0u; bit < MORTON_AXIS_BITS; bit++) {
         for (var axis = 0u; axis < 3u; axis++) {
             let position = 3u * bit + 2u - axis;
             let value = (q[axis] >> bit) & 1u;

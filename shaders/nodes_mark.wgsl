@@ -3,7 +3,9 @@
 // SAH cost as one leaf, Ct·A·N, does not exceed its subtree cost C (and N <= max leaf size) —
 // the choice the treelet pass already made in C = min(split, leaf). A node is kept when no proper
 // ancestor collapses; a kept collapsing node becomes an output leaf holding its N primitives.
-// One invocation per node walks up its parent links. Writes flags (bit 0 kept, bit 1 output leaf)
+// One invocation per node walks up its parent links, only as far as the first ancestor of more
+// than max_leaf_size primitives: no ancestor from there up can collapse (counts grow upwards), so
+// the walk takes at most max_leaf_size steps instead of the node's depth. Writes flags (bit 0 kept, bit 1 output leaf)
 // and the two inputs of the compaction scans (kept count, leaf primitive count). With pre-split
 // references (has_refs) an output leaf counts each triangle once: its references are gathered
 // depth-first and mapped to triangle ids, duplicates dropped.
@@ -71,6 +73,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     var x = i;
     while x != 0u {
         x = parents[x];
+        if prim_counts[x] > params.max_leaf_size {
+            break;
+        }
         if collapses(x) {
             kept = false;
             break;

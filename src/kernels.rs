@@ -26,7 +26,7 @@ pub const ALL: &[&KernelInfo] = &[
     &bvh::presplit::TRIANGLES_PRIORITY.info,
     &bvh::presplit::SPLITS_INIT_SEARCH.info,
     &bvh::presplit::SPLITS_COUNT.info,
-    &bvh::presplit::SPLITS_BISECT_STEP.info,
+    &bvh::presplit::SPLITS_NARROW_SEARCH.info,
     &bvh::presplit::SPLITS_WRITE_COUNTS.info,
     &bvh::presplit::TRIANGLES_SPLIT.info,
     &bvh::NODES_REFIT.info,

@@ -10,17 +10,17 @@ use glam::Vec3;
 use rand::Rng;
 use treelet::bvh::lbvh::{
     assemble_lbvh_cpu, build_lbvh_cpu, centroid_bounds_cpu, hierarchy_cpu, morton_keys_cpu,
-    prim_boxes_cpu, LbvhBuilder,
+    prim_boxes_cpu, LbvhBuilder, MORTON_BITS,
 };
 use treelet::bvh::{sah_cost, validate, Bvh, SahParams};
 use treelet::device::{Geometry, Tree};
 use treelet::scene::{load_scene, Triangle};
 use treelet::trace::closest_hits;
 
-/// The grid cell (x, y, z) of a 63-bit Morton key (bit 3k+2 holds x's bit k, 3k+1 y's, 3k z's).
+/// The grid cell (x, y, z) of a Morton key (bit 3k+2 holds x's bit k, 3k+1 y's, 3k z's).
 fn morton_cell(key: u64) -> [i64; 3] {
     let mut cell = [0i64; 3];
-    for k in 0..21 {
+    for k in 0..(MORTON_BITS / 3) as usize {
         for (axis, c) in cell.iter_mut().enumerate() {
             *c |= (((key >> (3 * k + 2 - axis)) & 1) as i64) << k;
         }

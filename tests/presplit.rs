@@ -236,7 +236,8 @@ fn a_device_rounding_divisions_differently_passes_the_agreement_check() {
 
 /// The GPU stage against the CPU twin:
 /// - split counts: exactly `splits_at(E, q)` of the GPU's own priorities and scale, within the
-///   budget, and E the largest scale that fits (or the top of the search interval);
+///   budget, and E the largest scale that fits (or the top of the search interval): exactly the
+///   CPU twin's bisection result from the same priorities (the GPU searches 16-ary);
 /// - priorities and pieces: within tolerances for at least `MIN_AGREEING` of the triangles, and
 ///   the pieces' total surface area within `PIECE_AREA_TOLERANCE`;
 /// - the pieces themselves: inside their triangle's box, covering it, and distinct.
@@ -267,6 +268,11 @@ fn gpu_split_agrees_with_cpu_twin() {
         }
         let used = |e: f32| -> u64 { q.iter().map(|&q| u64::from(splits_at(e, q))).sum() };
         assert!(used(e) <= u64::from(budget), "over budget");
+        assert_eq!(
+            e,
+            budget_scale(q, budget),
+            "{percent}%: GPU scale vs CPU twin"
+        );
         let q_max = q.iter().copied().fold(0.0f32, f32::max);
         let top = ((budget + 1) as f32).powi(3) / q_max;
         assert!(

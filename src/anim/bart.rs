@@ -87,9 +87,9 @@ impl Animation for BartAnimation {
         let start = Instant::now();
         self.scene.evaluate(t, &mut self.scratch);
         geometry.write_triangles(rec.ctx, &self.scratch)?;
-        Ok(Some(StageTime {
-            label: "animate".into(),
-            ms: Some(start.elapsed().as_secs_f64() * 1e3),
-        }))
+        Ok(Some(StageTime::cpu(
+            "animate",
+            start.elapsed().as_secs_f64() * 1e3,
+        )))
     }
 }

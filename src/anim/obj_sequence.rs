@@ -198,10 +198,10 @@ impl Animation for ObjSequence {
         let written = geometry.write_triangles(rec.ctx, &scratch);
         self.scratch = scratch;
         written?;
-        Ok(Some(StageTime {
-            label: "animate".into(),
-            ms: Some(start.elapsed().as_secs_f64() * 1e3),
-        }))
+        Ok(Some(StageTime::cpu(
+            "animate",
+            start.elapsed().as_secs_f64() * 1e3,
+        )))
     }
 }
 

@@ -7,7 +7,7 @@
 use super::animated_scene::COMPANION_PREFIX;
 use super::stats::BuildTiming;
 use crate::device::Tree;
-use crate::gpu::{GpuContext, GpuTimer, Readback, Recorder, StageTime};
+use crate::gpu::{GpuContext, GpuTimer, Readback, Recorder, StageTime, TimedPass};
 use crate::trace::{RecordedTrace, TraceStats};
 
 /// Slots in flight at most.
@@ -62,8 +62,8 @@ struct Slot {
     /// Lent to the frame being recorded (`begin`), returned by `submitted`.
     timer: Option<GpuTimer>,
     readback: Readback,
-    /// Pass labels and the record of the frame in flight.
-    pending: Option<(Vec<String>, FrameRecord)>,
+    /// Timed passes and the record of the frame in flight.
+    pending: Option<(Vec<TimedPass>, FrameRecord)>,
 }
 
 pub struct FrameReadback {
@@ -111,14 +111,14 @@ impl FrameReadback {
         };
         rec.resolve_timer();
         let slot = &mut self.slots[index];
-        let (labels, ticks) = match rec.timer_mut() {
-            Some(timer) => (timer.take_labels(), timer.resolved_buffer().cloned()),
+        let (passes, ticks) = match rec.timer_mut() {
+            Some(timer) => (timer.take_passes(), timer.resolved_buffer().cloned()),
             None => (Vec::new(), None),
         };
         let encoder = rec.encoder();
-        if let Some(ticks) = ticks.filter(|_| !labels.is_empty()) {
+        if let Some(ticks) = ticks.filter(|_| !passes.is_empty()) {
             slot.readback
-                .copy(encoder, &ticks, 0, labels.len() as u64 * 16);
+                .copy(encoder, &ticks, 0, passes.len() as u64 * 16);
         }
         if let (Some(counters), Some(trace)) = (counters, record.trace) {
             slot.readback.copy(
@@ -134,7 +134,7 @@ impl FrameReadback {
                 .copy(encoder, &wide.counters, WIDE_COUNTS_AT, WIDE_COUNTS_BYTES);
         }
         record.wide = tree.wide.is_some();
-        slot.pending = Some((labels, record));
+        slot.pending = Some((passes, record));
     }
 
     /// After the frame was submitted: takes its timer back and starts reading its statistics.
@@ -156,26 +156,31 @@ impl FrameReadback {
             let Some(bytes) = slot.readback.try_take() else {
                 continue;
             };
-            let (labels, record) = slot.pending.take().expect("checked above");
+            let (passes, record) = slot.pending.take().expect("checked above");
             let Ok(bytes) = bytes else {
                 continue;
             };
-            results.push(decode(ctx, labels, record, &bytes));
+            results.push(decode(ctx, passes, record, &bytes));
         }
         results
     }
 }
 
-fn decode(ctx: &GpuContext, labels: Vec<String>, record: FrameRecord, bytes: &[u8]) -> FrameResult {
+fn decode(
+    ctx: &GpuContext,
+    passes: Vec<TimedPass>,
+    record: FrameRecord,
+    bytes: &[u8],
+) -> FrameResult {
     let words = |at: u64, count: usize| -> Vec<u32> {
         bytemuck::pod_collect_to_vec(&bytes[at as usize..at as usize + 4 * count])
     };
     let ticks: Vec<u64> = if ctx.timestamps {
-        bytemuck::pod_collect_to_vec(&bytes[..labels.len() * 16])
+        bytemuck::pod_collect_to_vec(&bytes[..passes.len() * 16])
     } else {
         Vec::new()
     };
-    let stages = GpuTimer::stage_times(ctx, labels, &ticks);
+    let stages = GpuTimer::stage_times(ctx, passes, &ticks);
     let stage = |name: &str| stages.iter().find(|s| s.label == name).cloned();
     let animate = if record.animated {
         record.animate_cpu.clone().or_else(|| stage("animate"))
@@ -200,7 +205,7 @@ fn decode(ctx: &GpuContext, labels: Vec<String>, record: FrameRecord, bytes: &[u
             let label = s.label.strip_prefix(COMPANION_PREFIX)?;
             Some(StageTime {
                 label: label.into(),
-                ms: s.ms,
+                ..s.clone()
             })
         })
         .collect();

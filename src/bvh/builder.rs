@@ -217,10 +217,7 @@ fn cpu_build(
     let bvh = build();
     let cpu_ms = start.elapsed().as_secs_f64() * 1e3;
     let mut tree = Tree::upload(ctx, &bvh)?;
-    let mut stages = vec![StageTime {
-        label: label.into(),
-        ms: Some(cpu_ms),
-    }];
+    let mut stages = vec![StageTime::cpu(label, cpu_ms)];
     if layout == Layout::Wide {
         check_leaf_sizes(&bvh)?;
         let mut timer = GpuTimer::new(ctx, 1);

@@ -254,10 +254,7 @@ impl TreeUpdater {
                 };
                 let ms = start.elapsed().as_secs_f64() * 1e3;
                 *tree = Tree::upload(rec.ctx, &bvh)?;
-                Some(StageTime {
-                    label: format!("cpu {}", builder.name()),
-                    ms: Some(ms),
-                })
+                Some(StageTime::cpu(format!("cpu {}", builder.name()), ms))
             }
         };
         if self.refit.is_some() {

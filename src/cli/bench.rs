@@ -87,6 +87,10 @@ struct BenchRecord {
     mtris_per_s: f64,
     /// Per stage, of the median build.
     stages_ms: BTreeMap<String, Option<f64>>,
+    /// Compute dispatches per GPU stage of a build, and in all (on a real GPU each costs a fixed
+    /// few microseconds besides its work).
+    stages_dispatches: BTreeMap<String, u32>,
+    dispatches: u32,
     /// SAH of the binary tree.
     sah: f32,
     /// Wide layout: SAH of the wide tree (greedy collapse, as converted) and of the SAH-optimal
@@ -188,6 +192,7 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
         let trace_ms: Option<Vec<f64>> = traces.iter().map(|t| t.trace_ms).collect();
         let mrays: Option<Vec<f64>> = traces.iter().map(TraceStats::mrays_per_s).collect();
         let stats = median_trace(traces);
+        let stages = aggregate_stages(report.stages);
         let record = BenchRecord {
             scene: scene.name.clone(),
             builder: builder.name(),
@@ -210,10 +215,13 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
             build_warmup: report.warmup,
             build_wall_ms: report.wall_ms,
             mtris_per_s: scene.triangles.len() as f64 / (report.build_ms * 1e3),
-            stages_ms: aggregate_stages(report.stages)
-                .into_iter()
-                .map(|s| (s.label, s.ms))
+            stages_ms: stages.iter().map(|s| (s.label.clone(), s.ms)).collect(),
+            stages_dispatches: stages
+                .iter()
+                .filter(|s| s.dispatches > 0)
+                .map(|s| (s.label.clone(), s.dispatches))
                 .collect(),
+            dispatches: stages.iter().map(|s| s.dispatches).sum(),
             sah: sah_cost(&bvh, &params),
             wide_sah: wide_sah.map(|c| c.0),
             wide_sah_optimal: wide_sah.map(|c| c.1),

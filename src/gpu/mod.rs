@@ -31,4 +31,4 @@ pub use readback::Readback;
 pub use recorder::{Pass, Recorder};
 pub use shaders::shader_source;
 pub use spread::{Spread, Timing, Warmup};
-pub use timer::{aggregate_stages, GpuTimer, StageTime};
+pub use timer::{aggregate_stages, GpuTimer, StageTime, TimedPass};

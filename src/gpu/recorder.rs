@@ -71,6 +71,10 @@ impl<'a> Recorder<'a> {
             pass,
             ctx: self.ctx,
             params: self.params,
+            dispatches: self
+                .timer
+                .as_deref_mut()
+                .and_then(GpuTimer::last_dispatches),
         }
     }
 
@@ -116,6 +120,8 @@ pub struct Pass<'r> {
     pass: wgpu::ComputePass<'static>,
     ctx: &'r GpuContext,
     params: &'r mut ParamSlab,
+    /// The timed pass's dispatch count (with a timer).
+    dispatches: Option<&'r mut u32>,
 }
 
 impl<'r> Pass<'r> {
@@ -160,6 +166,7 @@ impl<'r> Pass<'r> {
         self.bind(kernel, params, buffers);
         let [x, y, z] = grid.groups;
         self.pass.dispatch_workgroups(x, y, z);
+        self.count_dispatch();
     }
 
     /// Like `dispatch`, with the workgroup grid read on the GPU from `args` at byte `offset`
@@ -174,6 +181,13 @@ impl<'r> Pass<'r> {
     ) {
         self.bind(kernel, params, buffers);
         self.pass.dispatch_workgroups_indirect(args, offset);
+        self.count_dispatch();
+    }
+
+    fn count_dispatch(&mut self) {
+        if let Some(count) = self.dispatches.as_deref_mut() {
+            *count += 1;
+        }
     }
 
     fn bind<P: Pod>(&mut self, kernel: &Kernel<P>, params: &P, buffers: &[&wgpu::Buffer]) {

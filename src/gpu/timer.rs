@@ -1,14 +1,35 @@
-//! GPU stage timing with timestamp queries written at the start and end of compute passes.
-//! Where the device has no timestamp support every stage reads "n/a" (`ms == None`).
+//! GPU stage timing with timestamp queries written at the start and end of compute passes, and
+//! the number of dispatches each timed pass recorded (what a real GPU's fixed per-dispatch cost
+//! multiplies). Where the device has no timestamp support every stage reads "n/a" (`ms == None`).
 
 use super::{read_buffer, GpuContext};
 use crate::{Error, Result};
 
-/// One timed stage; `ms` is `None` where timestamps are unavailable.
+/// One timed stage; `ms` is `None` where timestamps are unavailable. `dispatches`: compute
+/// dispatches the stage recorded (0 for work on the CPU).
 #[derive(Clone, Debug, PartialEq)]
 pub struct StageTime {
     pub label: String,
     pub ms: Option<f64>,
+    pub dispatches: u32,
+}
+
+impl StageTime {
+    /// A stage that ran on the CPU for `ms`.
+    pub fn cpu(label: impl Into<String>, ms: f64) -> Self {
+        Self {
+            label: label.into(),
+            ms: Some(ms),
+            dispatches: 0,
+        }
+    }
+}
+
+/// A timed pass of a recording: its label and how many dispatches it holds.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TimedPass {
+    pub label: String,
+    pub dispatches: u32,
 }
 
 impl std::fmt::Display for StageTime {
@@ -23,7 +44,7 @@ impl std::fmt::Display for StageTime {
 /// Collects timestamp pairs for up to `capacity` passes of one submission.
 pub struct GpuTimer {
     queries: Option<(wgpu::QuerySet, wgpu::Buffer)>,
-    labels: Vec<String>,
+    passes: Vec<TimedPass>,
     capacity: u32,
 }
 
@@ -45,7 +66,7 @@ impl GpuTimer {
         });
         Self {
             queries,
-            labels: Vec::new(),
+            passes: Vec::new(),
             capacity,
         }
     }
@@ -53,12 +74,15 @@ impl GpuTimer {
     /// Timestamp writes for a new compute pass named `label` (None without timestamp support).
     pub fn pass(&mut self, label: &str) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
         assert!(
-            (self.labels.len() as u32) < self.capacity,
+            (self.passes.len() as u32) < self.capacity,
             "GpuTimer capacity {} exceeded",
             self.capacity
         );
-        let index = self.labels.len() as u32;
-        self.labels.push(label.to_owned());
+        let index = self.passes.len() as u32;
+        self.passes.push(TimedPass {
+            label: label.to_owned(),
+            dispatches: 0,
+        });
         self.queries
             .as_ref()
             .map(|(set, _)| wgpu::ComputePassTimestampWrites {
@@ -68,10 +92,15 @@ impl GpuTimer {
             })
     }
 
+    /// The dispatch count of the pass opened last (`Pass` counts into it).
+    pub(crate) fn last_dispatches(&mut self) -> Option<&mut u32> {
+        self.passes.last_mut().map(|p| &mut p.dispatches)
+    }
+
     /// Records the resolve of all written timestamps; call before `encoder.finish()`.
     pub fn resolve(&self, encoder: &mut wgpu::CommandEncoder) {
         if let Some((set, buffer)) = &self.queries {
-            let used = self.labels.len() as u32 * 2;
+            let used = self.passes.len() as u32 * 2;
             if used > 0 {
                 encoder.resolve_query_set(set, 0..used, buffer, 0);
             }
@@ -84,26 +113,30 @@ impl GpuTimer {
         self.queries.as_ref().map(|(_, buffer)| buffer)
     }
 
-    /// The labels of the passes recorded so far, in order; clears the timer for reuse.
-    pub fn take_labels(&mut self) -> Vec<String> {
-        std::mem::take(&mut self.labels)
+    /// The passes recorded so far, in order; clears the timer for reuse.
+    pub fn take_passes(&mut self) -> Vec<TimedPass> {
+        std::mem::take(&mut self.passes)
     }
 
-    /// The stage times of passes `labels` from their resolved `ticks` (None-valued without
+    /// The stage times of `passes` from their resolved `ticks` (None-valued without
     /// timestamps: pass an empty `ticks`).
-    pub fn stage_times(ctx: &GpuContext, labels: Vec<String>, ticks: &[u64]) -> Vec<StageTime> {
+    pub fn stage_times(ctx: &GpuContext, passes: Vec<TimedPass>, ticks: &[u64]) -> Vec<StageTime> {
         let period_ns = f64::from(ctx.queue.get_timestamp_period());
-        labels
+        passes
             .into_iter()
             .enumerate()
-            .map(|(i, label)| {
+            .map(|(i, TimedPass { label, dispatches })| {
                 let ms = match ticks.get(2 * i..2 * i + 2) {
                     Some(&[start, end]) if end >= start && period_ns > 0.0 => {
                         Some((end - start) as f64 * period_ns * 1e-6)
                     }
                     _ => None,
                 };
-                StageTime { label, ms }
+                StageTime {
+                    label,
+                    ms,
+                    dispatches,
+                }
             })
             .collect()
     }
@@ -111,25 +144,28 @@ impl GpuTimer {
     /// Reads the stage times after the submission completed (blocks), and clears the timer for
     /// reuse.
     pub fn read(&mut self, ctx: &GpuContext) -> Result<Vec<StageTime>> {
-        let labels = self.take_labels();
+        let passes = self.take_passes();
         let ticks: Vec<u64> = match &self.queries {
-            Some((_, buffer)) => read_buffer(ctx, buffer, labels.len() * 2)?,
+            Some((_, buffer)) => read_buffer(ctx, buffer, passes.len() * 2)?,
             None => Vec::new(),
         };
         if self.queries.is_some() && ctx.queue.get_timestamp_period() <= 0.0 {
             return Err(Error::Gpu("device reports a zero timestamp period".into()));
         }
-        Ok(Self::stage_times(ctx, labels, &ticks))
+        Ok(Self::stage_times(ctx, passes, &ticks))
     }
 }
 
-/// Adds up stages with the same label (e.g. several treelet rounds), in order of first
-/// appearance; a label is "n/a" if any of its passes is.
+/// Adds up stages with the same label (e.g. several treelet rounds), times and dispatches, in
+/// order of first appearance; a label is "n/a" if any of its passes is.
 pub fn aggregate_stages(stages: Vec<StageTime>) -> Vec<StageTime> {
     let mut out: Vec<StageTime> = Vec::new();
     for stage in stages {
         match out.iter_mut().find(|s| s.label == stage.label) {
-            Some(total) => total.ms = total.ms.zip(stage.ms).map(|(a, b)| a + b),
+            Some(total) => {
+                total.ms = total.ms.zip(stage.ms).map(|(a, b)| a + b);
+                total.dispatches += stage.dispatches;
+            }
             None => out.push(stage),
         }
     }
@@ -140,28 +176,29 @@ pub fn aggregate_stages(stages: Vec<StageTime>) -> Vec<StageTime> {
 mod tests {
     use super::{aggregate_stages, StageTime};
 
-    fn stage(label: &str, ms: Option<f64>) -> StageTime {
+    fn stage(label: &str, ms: Option<f64>, dispatches: u32) -> StageTime {
         StageTime {
             label: label.into(),
             ms,
+            dispatches,
         }
     }
 
     #[test]
     fn stages_with_one_label_add_up_in_first_seen_order() {
         let stages = vec![
-            stage("bounds", Some(1.0)),
-            stage("sort", Some(2.0)),
-            stage("refit", None),
-            stage("sort", Some(3.0)),
-            stage("refit", Some(1.0)),
+            stage("bounds", Some(1.0), 2),
+            stage("sort", Some(2.0), 36),
+            stage("refit", None, 1),
+            stage("sort", Some(3.0), 36),
+            stage("refit", Some(1.0), 1),
         ];
         assert_eq!(
             aggregate_stages(stages),
             vec![
-                stage("bounds", Some(1.0)),
-                stage("sort", Some(5.0)),
-                stage("refit", None)
+                stage("bounds", Some(1.0), 2),
+                stage("sort", Some(5.0), 72),
+                stage("refit", None, 2)
             ]
         );
     }

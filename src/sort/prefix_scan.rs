@@ -1,5 +1,5 @@
 //! Portable multi-level exclusive prefix sum of u32s on the GPU (reduce-then-scan, no look-back):
-//! `counts_scan.wgsl` scans blocks of 1024 in place and writes block totals to the next level,
+//! `counts_scan.wgsl` scans blocks of `SCAN_BLOCK` (4096) in place and writes block totals to the next level,
 //! recursively until one block remains; `counts_add.wgsl` adds the scanned totals back, top down.
 //! The grand total ends in a one-element buffer. Used by the radix sort and by BVH compaction.
 

@@ -8,7 +8,7 @@
 //!
 //! 1. `keys_histogram.wgsl`: per tile of [`SORT_TILE`] keys, the 16 digit counts, stored
 //!    digit-major (`counts[digit * tiles + tile]`);
-//! 2. `counts_scan.wgsl` once per level (blocks of 1024, block totals to the next level) and
+//! 2. `counts_scan.wgsl` once per level (blocks of 4096, block totals to the next level) and
 //!    `counts_add.wgsl` once per level but the top (adds the scanned block totals back): an
 //!    exclusive scan of `counts` of any length, so each (digit, tile) gets its first output slot;
 //! 3. `keys_scatter.wgsl`: stable ranking within the tile by per-invocation counting (Zagha &
@@ -123,8 +123,8 @@ impl RadixSort {
     ///
     /// Everything is one compute pass, named "sort" (timestamped when the recording has a timer;
     /// also for `len` ≤ 1, where the pass is empty). The pass holds ceil(key_bits / 4) ×
-    /// (1 + 2 × levels) dispatches, levels = scan levels of the len / 512 counts (1 up to 524,288
-    /// pairs, else 2 below 2^29 pairs).
+    /// (1 + 2 × levels) dispatches, levels = scan levels of the len / 512 counts (1 up to 2,097,152
+    /// pairs, else 2).
     pub fn record(
         &mut self,
         rec: &mut Recorder<'_>,

@@ -1,20 +1,21 @@
-//! LBVH stage 2: 63-bit Morton keys (21 bits per axis) of triangle AABB centroids in the scene's
-//! centroid bounds (kernel `morton_compute`), and the CPU twin with the same float steps.
+//! LBVH stage 2: 48-bit Morton keys of triangle AABB centroids in the scene's centroid bounds
+//! (kernel `morton_compute`): the high `MORTON_AXIS_BITS` (16) bits per axis of a 2^21-cell grid;
+//! and the CPU twin with the same float steps.
 
 use glam::Vec3;
 
 use crate::geometry::Aabb;
-use crate::gpu::constants::MORTON_GRID;
+use crate::gpu::constants::{MORTON_AXIS_BITS, MORTON_GRID};
 use crate::gpu::{kernel, ItemCount, Items, Kernel, Pass};
 
-/// Key bits: 21 per axis.
-pub const MORTON_BITS: u32 = 63;
+/// Key bits: `MORTON_AXIS_BITS` per axis.
+pub const MORTON_BITS: u32 = 3 * MORTON_AXIS_BITS;
 
 kernel!(pub MORTON_COMPUTE: Items = "morton_compute"::"main", [64, 1, 1], [Read, Read, ReadWrite, ReadWrite, Read]);
 
-/// Spreads the low 21 bits of x so that bit k lands on bit 3k.
+/// Spreads the low `MORTON_AXIS_BITS` bits of x so that bit k lands on bit 3k.
 fn spread_bits(x: u32) -> u64 {
-    (0..21).fold(0u64, |acc, k| acc | (u64::from((x >> k) & 1) << (3 * k)))
+    (0..MORTON_AXIS_BITS).fold(0u64, |acc, k| acc | (u64::from((x >> k) & 1) << (3 * k)))
 }
 
 /// CPU twin: the Morton key of one primitive box's centroid within `bounds`. The grid is cubic:
@@ -26,7 +27,8 @@ pub fn morton_key(b: &Aabb, bounds: &Aabb) -> u64 {
     let grid = MORTON_GRID as f32;
     let scale = if extent > 0.0 { grid / extent } else { 0.0 };
     let q = ((c - bounds.min) * scale).clamp(Vec3::ZERO, Vec3::splat(grid - 1.0));
-    (spread_bits(q.x as u32) << 2) | (spread_bits(q.y as u32) << 1) | spread_bits(q.z as u32)
+    let kept = |x: f32| spread_bits(x as u32 >> (MORTON_GRID.ilog2() - MORTON_AXIS_BITS));
+    (kept(q.x) << 2) | (kept(q.y) << 1) | kept(q.z)
 }
 
 /// CPU twin of the whole stage.

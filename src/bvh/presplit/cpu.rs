@@ -10,7 +10,8 @@ use crate::gpu::constants::{MAX_SPLITS, MORTON_GRID};
 use crate::scene::Triangle;
 
 /// Bisection steps of the budget search.
-pub const BISECTION_STEPS: u32 = 32;
+/// Halvings of the CPU twin's search: 32 span every bit pattern below 2^32.
+const BISECTION_STEPS: u32 = 32;
 const GRID: f32 = MORTON_GRID as f32;
 const GRID_MAX: f32 = (MORTON_GRID - 1) as f32;
 
@@ -107,9 +108,10 @@ pub fn splits_at(e: f32, q: f32) -> u32 {
     k
 }
 
-/// E = D³ of the budget search: the bisection of `splits_budget.wgsl`, on the bit patterns of E
-/// (non-negative floats order like their bits, so integer midpoints halve the interval exactly
-/// and 32 halvings span every float from 0 to the upper bound).
+/// E = D³ of the budget search: the largest bit pattern below hi = (budget + 1)³ / q_max whose
+/// split sum fits the budget (non-negative floats order like their bits). Found here by bisection
+/// on the bit patterns (integer midpoints halve the interval exactly, and 32 halvings span every
+/// float from 0 to hi); `splits_budget.wgsl` finds the same E by a 16-ary search.
 pub fn budget_scale(priorities: &[f32], budget: u32) -> f32 {
     let q_max = priorities.iter().copied().fold(0.0f32, f32::max);
     let b = (budget + 1) as f32;

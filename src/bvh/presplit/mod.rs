@@ -1,7 +1,7 @@
 //! Triangle pre-splitting on the GPU (Karras & Aila 2013, §5): large, badly fitting triangles
 //! become several references (clipped boxes of the same triangle) before the LBVH build, within a
 //! budget of β·N extra references. Stages: triangle boxes → scene box (reduction) → split
-//! priorities (`triangles_priority.wgsl`) → split counts under the budget by bisection
+//! priorities (`triangles_priority.wgsl`) → split counts under the budget by a 16-ary search
 //! (`splits_budget.wgsl`) → reference offsets (exclusive scan) → recursive splitting at Morton-grid
 //! planes (`triangles_split.wgsl`). The reference count stays on the GPU: the LBVH stages after
 //! it are sized for N + β·N references and read the count (`gpu::ItemCount`). CPU twin:
@@ -14,10 +14,10 @@ mod triangles_split;
 
 pub use cpu::{
     budget_scale, presplit_cpu, split_importance, split_priority, split_triangle, splits_at,
-    SplitGrid, BISECTION_STEPS,
+    SplitGrid,
 };
 pub use splits_budget::{
-    SPLITS_BISECT_STEP, SPLITS_COUNT, SPLITS_INIT_SEARCH, SPLITS_WRITE_COUNTS,
+    SPLITS_COUNT, SPLITS_INIT_SEARCH, SPLITS_NARROW_SEARCH, SPLITS_WRITE_COUNTS,
 };
 pub use triangles_priority::TRIANGLES_PRIORITY;
 pub use triangles_split::TRIANGLES_SPLIT;
@@ -27,6 +27,7 @@ use splits_budget::BudgetParams;
 use super::lbvh::{CentroidsReduce, TrianglesBounds};
 use crate::device::Geometry;
 use crate::geometry::GpuAabb;
+use crate::gpu::constants::{SPLIT_SEARCH_CANDIDATES, SPLIT_SEARCH_STEPS};
 use crate::gpu::{
     read_buffer, storage_buffer_zeroed, GpuContext, Grid, ItemCount, Items, Kernel, ParamSlab,
     Recorder,
@@ -65,7 +66,7 @@ pub struct PreSplitter {
     priority: Kernel<Items>,
     init_search: Kernel<BudgetParams>,
     count_splits: Kernel<BudgetParams>,
-    bisect_step: Kernel<BudgetParams>,
+    narrow_search: Kernel<BudgetParams>,
     write_counts: Kernel<BudgetParams>,
     split: Kernel<Items>,
     scan: PrefixScan,
@@ -81,7 +82,7 @@ impl PreSplitter {
             priority: Kernel::new(ctx, &TRIANGLES_PRIORITY),
             init_search: Kernel::new(ctx, &SPLITS_INIT_SEARCH),
             count_splits: Kernel::new(ctx, &SPLITS_COUNT),
-            bisect_step: Kernel::new(ctx, &SPLITS_BISECT_STEP),
+            narrow_search: Kernel::new(ctx, &SPLITS_NARROW_SEARCH),
             write_counts: Kernel::new(ctx, &SPLITS_WRITE_COUNTS),
             split: Kernel::new(ctx, &TRIANGLES_SPLIT),
             scan: PrefixScan::new(ctx),
@@ -116,7 +117,11 @@ impl PreSplitter {
                 tri_boxes: storage_buffer_zeroed(ctx, "triangle boxes", u64::from(n) * 32)?,
                 bounds_levels: CentroidsReduce::level_buffers(ctx, n)?,
                 priorities: storage_buffer_zeroed(ctx, "split priorities", u64::from(n) * 4)?,
-                budget_state: storage_buffer_zeroed(ctx, "split budget state", 32)?,
+                budget_state: storage_buffer_zeroed(
+                    ctx,
+                    "split budget state",
+                    u64::from(3 + SPLIT_SEARCH_CANDIDATES) * 4,
+                )?,
                 ref_offsets: storage_buffer_zeroed(ctx, "reference offsets", u64::from(n) * 4)?,
             });
         }
@@ -170,9 +175,9 @@ impl PreSplitter {
                 ],
             );
             pass.dispatch(&self.init_search, one, &budget_params, &budget_buffers);
-            for _ in 0..BISECTION_STEPS {
+            for _ in 0..SPLIT_SEARCH_STEPS {
                 pass.dispatch(&self.count_splits, grid, &budget_params, &budget_buffers);
-                pass.dispatch(&self.bisect_step, one, &budget_params, &budget_buffers);
+                pass.dispatch(&self.narrow_search, one, &budget_params, &budget_buffers);
             }
             pass.dispatch(&self.write_counts, grid, &budget_params, &budget_buffers);
             self.scan.record(&mut pass, &s.ref_offsets, n)?;
@@ -214,10 +219,11 @@ impl PreSplitter {
         rec.submit();
         let total = read_buffer::<u32>(ctx, self.total(), 1)?[0];
         let s = self.scratch.as_ref().expect("recorded above");
-        let state: Vec<u32> = read_buffer(ctx, &s.budget_state, 3)?;
+        // [0] q_max, [1] lo: the scale found.
+        let state: Vec<u32> = read_buffer(ctx, &s.budget_state, 2)?;
         Ok(SplitStages {
             priorities: read_buffer(ctx, &s.priorities, geometry.triangle_count as usize)?,
-            scale: f32::from_bits(state[2]),
+            scale: f32::from_bits(state[1]),
             boxes: read_buffer(ctx, &boxes, total as usize)?,
             ref_tris: read_buffer(
                 ctx,
