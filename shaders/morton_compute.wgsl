@@ -1,14 +1,22 @@
-// 48-bit Morton keys of primitive box centroids normalized to the scene's centroid bounds (LBVH
-// stage 2, Karras 2012 §4), and the identity permutation as sort values. Centroids are quantized on
-// a grid of MORTON_GRID (2^21) cells per axis, of which the keys keep the high MORTON_AXIS_BITS (16)
-// bits per axis. The grid is cubic (cell size from the longest side), so thin axes do not waste
-// top-level splits. Keys are vec2<u32>(low 32 bits, high 32 bits); bit 3k+2 holds x's kept bit k,
-// 3k+1 y's, 3k z's.
+// Morton keys of primitive box centroids normalized to the scene's centroid bounds (LBVH stage 2,
+// Karras 2012 §4), and the identity permutation as sort values. Centroids are quantized on a grid
+// of MORTON_GRID (2^21) cells per axis; the full key interleaves the high MORTON_AXIS_BITS (16) bits
+// of each axis (48 bits: bit 3k+2 holds x's kept bit k, 3k+1 y's, 3k z's), and the kernel writes its
+// high `params.key_bits` bits. The grid is cubic (cell size from the longest side), so thin axes do
+// not waste top-level splits. Keys are vec2<u32>(low 32 bits, high 32 bits).
 #include "constants.wgsl"
 #include "aabb.wgsl"
-#include "items.wgsl"
 
-@group(0) @binding(0) var<uniform> params: Items;
+// Rust twin: `MortonParams` (src/bvh/lbvh/morton_compute.rs).
+struct MortonParams {
+    count: u32,
+    row_pitch: u32,
+    // 1..=48: the high bits of the full key that the key keeps.
+    key_bits: u32,
+    pad: u32,
+}
+
+@group(0) @binding(0) var<uniform> params: MortonParams;
 @group(0) @binding(1) var<storage, read> prim_boxes: array<Aabb>;
 // [0] holds the centroid bounds.
 @group(0) @binding(2) var<storage, read> centroid_bounds: array<Aabb>;
@@ -43,6 +51,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
                 key.y |= value << (position - 32u);
             }
         }
+    }
+    // Shift the 48-bit key right by 48 - key_bits.
+    let drop = 3u * MORTON_AXIS_BITS - params.key_bits;
+    if drop >= 32u {
+        key = vec2<u32>(key.y >> (drop - 32u), 0u);
+    } else if drop > 0u {
+        key = vec2<u32>((key.x >> drop) | (key.y << (32u - drop)), key.y >> drop);
     }
     keys[i] = key;
     values[i] = i;

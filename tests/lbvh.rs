@@ -9,38 +9,49 @@ use common::{assert_hits_match, gpu, random_soup, rng, scene_of, test_rays};
 use glam::Vec3;
 use rand::Rng;
 use treelet::bvh::lbvh::{
-    assemble_lbvh_cpu, build_lbvh_cpu, centroid_bounds_cpu, hierarchy_cpu, morton_keys_cpu,
-    prim_boxes_cpu, LbvhBuilder, MORTON_BITS,
+    assemble_lbvh_cpu, build_lbvh_from_boxes_cpu, centroid_bounds_cpu, hierarchy_cpu,
+    morton_keys_cpu, prim_boxes_cpu, LbvhBuilder, LBVH_KEY_BITS, MORTON_BITS, TRBVH_KEY_BITS,
 };
 use treelet::bvh::{sah_cost, validate, Bvh, SahParams};
 use treelet::device::{Geometry, Tree};
 use treelet::scene::{load_scene, Triangle};
 use treelet::trace::closest_hits;
 
-/// The grid cell (x, y, z) of a Morton key (bit 3k+2 holds x's bit k, 3k+1 y's, 3k z's).
-fn morton_cell(key: u64) -> [i64; 3] {
+/// The grid cell (x, y, z) of a key of the high `key_bits` bits of a full Morton key (whose bit
+/// 3k+2 holds x's bit k, 3k+1 y's, 3k z's), with the dropped bits zero.
+fn morton_cell(key: u64, key_bits: u32) -> [i64; 3] {
+    let full = key << (MORTON_BITS - key_bits);
     let mut cell = [0i64; 3];
     for k in 0..(MORTON_BITS / 3) as usize {
         for (axis, c) in cell.iter_mut().enumerate() {
-            *c |= (((key >> (3 * k + 2 - axis)) & 1) as i64) << k;
+            *c |= (((full >> (3 * k + 2 - axis)) & 1) as i64) << k;
         }
     }
     cell
+}
+
+/// The cell size of each axis in keys of `key_bits` bits (in units of the full key's cells).
+fn morton_cell_size(key_bits: u32) -> [i64; 3] {
+    morton_cell(u64::MAX >> (64 - key_bits), key_bits).map(|c| c & -c)
 }
 
 /// Below this many primitives one key moving a cell can reorder much of the tree, so whole-tree
 /// quality is compared with the CPU twin's only from here up.
 const SAH_COMPARISON_MIN_PRIMS: usize = 1000;
 
-/// The GPU tree's SAH is within 0.5 % of the CPU twin's (which builds from its own keys).
-fn assert_sah_close_to_cpu_twin(bvh: &Bvh, triangles: &[Triangle]) {
+/// The GPU tree's SAH is within 0.5 % of the CPU twin's (which builds from its own keys of
+/// `key_bits`).
+fn assert_sah_close_to_cpu_twin(bvh: &Bvh, triangles: &[Triangle], key_bits: u32) {
     if triangles.len() < SAH_COMPARISON_MIN_PRIMS {
         return;
     }
     let sah = SahParams::default();
     let (got, want) = (
         sah_cost(bvh, &sah),
-        sah_cost(&build_lbvh_cpu(triangles), &sah),
+        sah_cost(
+            &build_lbvh_from_boxes_cpu(&prim_boxes_cpu(triangles), key_bits).0,
+            &sah,
+        ),
     );
     assert!(
         (got - want).abs() <= 0.005 * want,
@@ -51,28 +62,37 @@ fn assert_sah_close_to_cpu_twin(bvh: &Bvh, triangles: &[Triangle]) {
 /// Builds on the GPU with every stage read back and checks each against its CPU twin:
 /// - centroid bounds: exactly (only min, max, one add and a halving, all correctly rounded);
 /// - Morton keys: each within one grid cell per axis of the CPU key (the grid scale is a
-///   division, which GPUs may round differently from the CPU);
+///   division, which GPUs may round differently from the CPU), at the builder's key width;
 /// - radix sort: the CPU sort of the GPU's keys gives the GPU's sorted keys and values exactly;
 /// - hierarchy: the CPU emission from the GPU's sorted keys gives the GPU's parents exactly;
 /// - bottom-up bounds: the CPU assembly from that hierarchy and the GPU's order gives the GPU's
 ///   nodes bit for bit (box unions are min/max, exact on every device);
 /// - the whole tree: valid, and its SAH within 0.5 % of the CPU twin's.
 fn check_stages_against_cpu_twins(triangles: Vec<Triangle>) {
+    check_stages_with_key_bits(triangles, LBVH_KEY_BITS);
+}
+
+fn check_stages_with_key_bits(triangles: Vec<Triangle>, key_bits: u32) {
     let scene = scene_of(triangles);
     let tris = &scene.triangles;
     let geometry = Geometry::upload(gpu(), &scene).unwrap();
-    let mut builder = LbvhBuilder::new(gpu());
+    let mut builder = LbvhBuilder::new(gpu()).with_key_bits(key_bits).unwrap();
     let stages = builder.build_stages(gpu(), &geometry).unwrap();
 
     let boxes = prim_boxes_cpu(tris);
     let bounds = centroid_bounds_cpu(&boxes);
     assert_eq!(stages.centroid_bounds, bounds, "centroid bounds");
-    let cpu_keys = morton_keys_cpu(&boxes, &bounds);
+    let cpu_keys = morton_keys_cpu(&boxes, &bounds, key_bits);
+    let size = morton_cell_size(key_bits);
     for (i, (&g, &c)) in stages.keys.iter().zip(&cpu_keys).enumerate() {
-        let (gc, cc) = (morton_cell(g), morton_cell(c));
         assert!(
-            (0..3).all(|a| (gc[a] - cc[a]).abs() <= 1),
-            "morton key of primitive {i}: GPU cell {gc:?}, CPU cell {cc:?}"
+            g >> key_bits == 0,
+            "key {g:#x} of primitive {i} wider than {key_bits} bits"
+        );
+        let (gc, cc) = (morton_cell(g, key_bits), morton_cell(c, key_bits));
+        assert!(
+            (0..3).all(|a| (gc[a] - cc[a]).abs() <= size[a]),
+            "morton key of primitive {i}: GPU cell {gc:?}, CPU cell {cc:?} ({key_bits} bits)"
         );
     }
     let mut pairs: Vec<(u64, u32)> = stages.keys.iter().copied().zip(0..).collect();
@@ -96,7 +116,7 @@ fn check_stages_against_cpu_twins(triangles: Vec<Triangle>) {
     );
     assert_eq!(stages.bvh.prim_indices, stages.sorted_prims);
     validate(&stages.bvh, tris).expect("valid LBVH");
-    assert_sah_close_to_cpu_twin(&stages.bvh, tris);
+    assert_sah_close_to_cpu_twin(&stages.bvh, tris, key_bits);
 }
 
 #[test]
@@ -108,6 +128,24 @@ fn stages_equal_cpu_twins_on_random_soup() {
 fn stages_equal_cpu_twins_on_scenes() {
     check_stages_against_cpu_twins(load_scene("cornell").unwrap().triangles);
     check_stages_against_cpu_twins(load_scene("field-10k").unwrap().triangles);
+}
+
+/// Narrower keys (the treelet builders' 32 bits, and odd widths that split an axis's bits) keep
+/// every stage equal to its twin at that width.
+#[test]
+fn stages_equal_cpu_twins_at_other_key_widths() {
+    let field = load_scene("field-10k").unwrap().triangles;
+    for key_bits in [TRBVH_KEY_BITS, 31, 7, 1] {
+        check_stages_with_key_bits(field.clone(), key_bits);
+        check_stages_with_key_bits(random_soup(3000, u64::from(key_bits)), key_bits);
+    }
+}
+
+#[test]
+fn key_widths_out_of_range_are_errors() {
+    for key_bits in [0, MORTON_BITS + 1] {
+        assert!(LbvhBuilder::new(gpu()).with_key_bits(key_bits).is_err());
+    }
 }
 
 #[test]
@@ -191,7 +229,7 @@ fn repeated_builds_are_identical_and_valid() {
     builder.build(gpu(), &geometry, &mut tree).unwrap();
     let first = tree.download(gpu()).unwrap();
     validate(&first, &scene.triangles).unwrap();
-    assert_sah_close_to_cpu_twin(&first, &scene.triangles);
+    assert_sah_close_to_cpu_twin(&first, &scene.triangles, LBVH_KEY_BITS);
     for round in 1..200 {
         builder.build(gpu(), &geometry, &mut tree).unwrap();
         let bvh = tree.download(gpu()).unwrap();

@@ -9,7 +9,7 @@ mod common;
 use common::{assert_hits_match, gpu, random_soup, rng, scene_of, test_rays};
 use glam::Vec3;
 use rand::Rng;
-use treelet::bvh::lbvh::{build_lbvh_from_boxes_cpu, prim_boxes_cpu};
+use treelet::bvh::lbvh::{build_lbvh_from_boxes_cpu, prim_boxes_cpu, TRBVH_KEY_BITS};
 use treelet::bvh::treelet::{
     build_trbvh_cpu, optimize_lbvh_cpu, solve_treelet, surface_area, CostModel, TrbvhBuilder,
     TreeletLeaf, TreeletSettings, WorkingTree, MAX_LEVEL_DISPATCHES,
@@ -396,7 +396,8 @@ fn a_fusing_device_passes_the_agreement_checks() {
             vec![Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y, 0); 300],
         ),
     ] {
-        let (lbvh, parents) = build_lbvh_from_boxes_cpu(&prim_boxes_cpu(&triangles));
+        let (lbvh, parents) =
+            build_lbvh_from_boxes_cpu(&prim_boxes_cpu(&triangles), TRBVH_KEY_BITS);
         let lbvh = WorkingTree::from_lbvh(lbvh, parents);
         for settings in [TreeletSettings::BALANCED, TreeletSettings::HIGH_QUALITY] {
             let plain = CostModel::from(&sah);

@@ -8,9 +8,10 @@ pub const MISS: u32 = u32::MAX;
 /// Cells per axis of the Morton grid the LBVH keys quantize centroids in and the pre-splitting
 /// planes share.
 pub const MORTON_GRID: u32 = 1 << 21;
-/// Grid bits per axis the LBVH keys keep (the high ones): 48-bit keys, 12 radix-sort passes.
-/// Measured on 8 scenes (7 shared ones and a dense model in a 500× larger "stadium"): the lbvh,
-/// trbvh and trbvh-split trees are identical to those of all 21 bits (README, "Morton keys").
+/// Grid bits per axis of the full LBVH key (the high ones): 48 bits, of which each builder keeps
+/// the high `key_bits` (`bvh::lbvh::LBVH_KEY_BITS`, `TRBVH_KEY_BITS`). Measured on 8 scenes (7
+/// shared ones and a dense model in a 500× larger "stadium"): trees identical to those of all 21
+/// bits per axis (README, "Build floor").
 pub const MORTON_AXIS_BITS: u32 = 16;
 /// Splits per triangle at most in pre-splitting (pieces ≤ `MAX_SPLITS + 1`).
 pub const MAX_SPLITS: u32 = 31;

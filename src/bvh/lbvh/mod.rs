@@ -17,7 +17,10 @@ pub use centroids_reduce::{
     centroid_bounds_cpu, CentroidsReduce, CENTROIDS_FROM_BOXES, CENTROIDS_FROM_PRIMS,
 };
 pub use lbvh_hierarchy::{hierarchy_cpu, Hierarchy, LBVH_HIERARCHY};
-pub use morton_compute::{morton_key, morton_keys_cpu, MORTON_BITS, MORTON_COMPUTE};
+pub use morton_compute::{
+    morton_key, morton_keys_cpu, MortonParams, LBVH_KEY_BITS, MORTON_BITS, MORTON_COMPUTE,
+    TRBVH_KEY_BITS,
+};
 pub use triangles_bounds::{prim_boxes_cpu, TrianglesBounds, TRIANGLES_BOUNDS};
 
 use bounds_refit::BoundsRefit;
@@ -57,20 +60,21 @@ impl<'a> LbvhInput<'a> {
     }
 }
 
-/// CPU twin of the whole GPU LBVH pipeline over triangles.
+/// CPU twin of the whole GPU LBVH pipeline over triangles (the `lbvh` builder's key width).
 pub fn build_lbvh_cpu(triangles: &[Triangle]) -> Bvh {
-    build_lbvh_from_boxes_cpu(&prim_boxes_cpu(triangles)).0
+    build_lbvh_from_boxes_cpu(&prim_boxes_cpu(triangles), LBVH_KEY_BITS).0
 }
 
-/// CPU twin of the LBVH stages over primitive boxes: the tree and its parent links.
-pub fn build_lbvh_from_boxes_cpu(prim_boxes: &[Aabb]) -> (Bvh, Vec<u32>) {
+/// CPU twin of the LBVH stages over primitive boxes with keys of `key_bits` (1..=48) bits: the
+/// tree and its parent links.
+pub fn build_lbvh_from_boxes_cpu(prim_boxes: &[Aabb], key_bits: u32) -> (Bvh, Vec<u32>) {
     if prim_boxes.is_empty() {
         return (Bvh::default(), Vec::new());
     }
     let bounds = centroid_bounds_cpu(prim_boxes);
-    let keys = morton_keys_cpu(prim_boxes, &bounds);
+    let keys = morton_keys_cpu(prim_boxes, &bounds, key_bits);
     let values: Vec<u32> = (0..prim_boxes.len() as u32).collect();
-    let (sorted_keys, sorted_prims) = sort_pairs_cpu(&keys, &values, MORTON_BITS);
+    let (sorted_keys, sorted_prims) = sort_pairs_cpu(&keys, &values, key_bits);
     let hierarchy = hierarchy_cpu(&sorted_keys);
     let bvh = assemble_lbvh_cpu(prim_boxes, &hierarchy, &sorted_prims);
     (bvh, hierarchy.parents)
@@ -105,6 +109,8 @@ pub struct LbvhBuilder {
     sort: RadixSort,
     hierarchy: LbvhHierarchy,
     refit: BoundsRefit,
+    /// The high bits of the full Morton key that the keys keep (`morton_compute`).
+    key_bits: u32,
     scratch: Option<Scratch>,
     /// Parameters of the builds this builder records and submits itself (`build`).
     params: ParamSlab,
@@ -122,9 +128,26 @@ impl LbvhBuilder {
             sort: RadixSort::new(ctx),
             hierarchy: LbvhHierarchy::new(ctx),
             refit: BoundsRefit::new(ctx),
+            key_bits: LBVH_KEY_BITS,
             scratch: None,
             params: ParamSlab::new(ctx),
         }
+    }
+
+    /// Keys of `key_bits` (1..=48) bits instead of `LBVH_KEY_BITS`: the high bits of the full key.
+    pub fn with_key_bits(mut self, key_bits: u32) -> Result<Self> {
+        if !(1..=MORTON_BITS).contains(&key_bits) {
+            return Err(Error::InvalidArgument(format!(
+                "Morton key bits must be 1..={MORTON_BITS}, got {key_bits}"
+            )));
+        }
+        self.key_bits = key_bits;
+        Ok(self)
+    }
+
+    /// The key width of this builder's builds.
+    pub fn key_bits(&self) -> u32 {
+        self.key_bits
     }
 
     /// Builds `geometry`'s tree into `tree` in one submission and waits; returns the per-stage
@@ -276,6 +299,7 @@ impl LbvhBuilder {
             &mut pass,
             &scratch.prim_boxes,
             count,
+            self.key_bits,
             &bounds_levels[levels - 1],
             &scratch.keys,
             order,
@@ -293,7 +317,7 @@ impl LbvhBuilder {
     ) -> Result<()> {
         let scratch = self.scratch.as_ref().expect("reserved");
         self.sort
-            .record(rec, &scratch.keys, order, count, MORTON_BITS)?;
+            .record(rec, &scratch.keys, order, count, self.key_bits)?;
         {
             let mut pass = rec.pass("hierarchy");
             self.hierarchy

@@ -1,44 +1,68 @@
-//! LBVH stage 2: 48-bit Morton keys of triangle AABB centroids in the scene's centroid bounds
-//! (kernel `morton_compute`): the high `MORTON_AXIS_BITS` (16) bits per axis of a 2^21-cell grid;
-//! and the CPU twin with the same float steps.
+//! LBVH stage 2: Morton keys of triangle AABB centroids in the scene's centroid bounds (kernel
+//! `morton_compute`), and the CPU twin with the same float steps. Centroids are quantized on a
+//! 2^21-cell grid per axis; the full key interleaves the high `MORTON_AXIS_BITS` (16) bits of each
+//! axis (48 bits), and a build keeps its high `key_bits` of them: fewer radix-sort passes (4 bits
+//! each), and an order consistent with the full key's (ties go to the primitive index).
 
+use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
 use crate::geometry::Aabb;
 use crate::gpu::constants::{MORTON_AXIS_BITS, MORTON_GRID};
-use crate::gpu::{kernel, ItemCount, Items, Kernel, Pass};
+use crate::gpu::{kernel, Grid, ItemCount, Kernel, Pass};
 
-/// Key bits: `MORTON_AXIS_BITS` per axis.
+/// Bits of the full key: `MORTON_AXIS_BITS` per axis.
 pub const MORTON_BITS: u32 = 3 * MORTON_AXIS_BITS;
+/// Key bits of the `lbvh` builder: all 48 (12 sort passes), so that a dense object in a large,
+/// empty scene still spreads over many cells.
+pub const LBVH_KEY_BITS: u32 = MORTON_BITS;
+/// Key bits of the treelet builders (`trbvh`, `trbvh-split`): 32 (8 sort passes). Keys that
+/// coarse change the LBVH of a dense object in a large scene, but the treelet rounds repair it:
+/// the optimized trees' SAH moves by at most 0.1 % on the scenes measured (README, "Build floor").
+pub const TRBVH_KEY_BITS: u32 = 32;
 
-kernel!(pub MORTON_COMPUTE: Items = "morton_compute"::"main", [64, 1, 1], [Read, Read, ReadWrite, ReadWrite, Read]);
+/// Parameters of `morton_compute.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+pub struct MortonParams {
+    count: u32,
+    row_pitch: u32,
+    key_bits: u32,
+    _pad: u32,
+}
+const _: () = assert!(std::mem::size_of::<MortonParams>() == 16);
+
+kernel!(pub MORTON_COMPUTE: MortonParams = "morton_compute"::"main", [64, 1, 1], [Read, Read, ReadWrite, ReadWrite, Read]);
 
 /// Spreads the low `MORTON_AXIS_BITS` bits of x so that bit k lands on bit 3k.
 fn spread_bits(x: u32) -> u64 {
     (0..MORTON_AXIS_BITS).fold(0u64, |acc, k| acc | (u64::from((x >> k) & 1) << (3 * k)))
 }
 
-/// CPU twin: the Morton key of one primitive box's centroid within `bounds`. The grid is cubic:
-/// its cell size follows the bounds' longest side on every axis, so flat scenes do not spend key
-/// bits (and top-level splits) on their thin axis.
-pub fn morton_key(b: &Aabb, bounds: &Aabb) -> u64 {
+/// CPU twin: the Morton key of one primitive box's centroid within `bounds`, its high `key_bits`
+/// (1..=48) bits. The grid is cubic: its cell size follows the bounds' longest side on every axis,
+/// so flat scenes do not spend key bits (and top-level splits) on their thin axis.
+pub fn morton_key(b: &Aabb, bounds: &Aabb, key_bits: u32) -> u64 {
     let c = (b.min + b.max) * 0.5;
     let extent = (bounds.max - bounds.min).max_element();
     let grid = MORTON_GRID as f32;
     let scale = if extent > 0.0 { grid / extent } else { 0.0 };
     let q = ((c - bounds.min) * scale).clamp(Vec3::ZERO, Vec3::splat(grid - 1.0));
     let kept = |x: f32| spread_bits(x as u32 >> (MORTON_GRID.ilog2() - MORTON_AXIS_BITS));
-    (kept(q.x) << 2) | (kept(q.y) << 1) | kept(q.z)
+    ((kept(q.x) << 2) | (kept(q.y) << 1) | kept(q.z)) >> (MORTON_BITS - key_bits)
 }
 
 /// CPU twin of the whole stage.
-pub fn morton_keys_cpu(prim_boxes: &[Aabb], bounds: &Aabb) -> Vec<u64> {
-    prim_boxes.iter().map(|b| morton_key(b, bounds)).collect()
+pub fn morton_keys_cpu(prim_boxes: &[Aabb], bounds: &Aabb, key_bits: u32) -> Vec<u64> {
+    prim_boxes
+        .iter()
+        .map(|b| morton_key(b, bounds, key_bits))
+        .collect()
 }
 
 /// The kernel `morton_compute`.
 pub(crate) struct MortonCompute {
-    kernel: Kernel<Items>,
+    kernel: Kernel<MortonParams>,
 }
 
 impl MortonCompute {
@@ -48,21 +72,37 @@ impl MortonCompute {
         }
     }
 
-    /// Records key computation over `count` primitive boxes: `keys[i]` (as `[lo, hi]`) and
-    /// `values[i] = i` (the permutation the sort reorders).
+    /// Records key computation over `count` primitive boxes: `keys[i]` (as `[lo, hi]`, the high
+    /// `key_bits` of the full key) and `values[i] = i` (the permutation the sort reorders).
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         pass: &mut Pass<'_>,
         prim_boxes: &wgpu::Buffer,
         count: ItemCount<'_>,
+        key_bits: u32,
         centroid_bounds: &wgpu::Buffer,
         keys: &wgpu::Buffer,
         values: &wgpu::Buffer,
     ) {
-        pass.dispatch_counted(
+        let grid: Grid = self.kernel.grid(pass.ctx(), count.capacity());
+        let params = MortonParams {
+            count: count.capacity(),
+            row_pitch: grid.row_pitch,
+            key_bits,
+            _pad: 0,
+        };
+        pass.dispatch(
             &self.kernel,
-            count,
-            &[prim_boxes, centroid_bounds, keys, values],
+            grid,
+            &params,
+            &[
+                prim_boxes,
+                centroid_bounds,
+                keys,
+                values,
+                count.limit(pass.ctx()),
+            ],
         );
     }
 }

@@ -32,7 +32,9 @@ pub use crate::gpu::constants::{MAX_GPU_LEAF_SIZE, MAX_LEVEL_DISPATCHES, MAX_TRE
 use collapse::{Collapse, CollapseBuffers};
 use rounds::{Round, TreeletRounds, TreeletState, SCHEDULE_WORDS};
 
-use super::lbvh::{build_lbvh_from_boxes_cpu, prim_boxes_cpu, LbvhBuilder, LbvhInput, LBVH_PASSES};
+use super::lbvh::{
+    build_lbvh_from_boxes_cpu, prim_boxes_cpu, LbvhBuilder, LbvhInput, LBVH_PASSES, TRBVH_KEY_BITS,
+};
 use super::presplit::{presplit_cpu, split_budget, PreSplitter};
 use super::{Bvh, BvhNode, SahParams};
 use crate::device::{Geometry, Tree};
@@ -168,7 +170,7 @@ pub fn optimize_prims_cpu(
     settings: &TreeletSettings,
     sah: &SahParams,
 ) -> WorkingTree {
-    let (lbvh, parents) = build_lbvh_from_boxes_cpu(prim_boxes);
+    let (lbvh, parents) = build_lbvh_from_boxes_cpu(prim_boxes, TRBVH_KEY_BITS);
     optimize_lbvh_cpu(
         WorkingTree::from_lbvh(lbvh, parents),
         settings,
@@ -261,7 +263,7 @@ impl TrbvhBuilder {
     pub fn new(ctx: &GpuContext, settings: TreeletSettings, sah: SahParams) -> Result<Self> {
         settings.validate(&sah)?;
         Ok(Self {
-            lbvh: LbvhBuilder::new(ctx),
+            lbvh: LbvhBuilder::new(ctx).with_key_bits(TRBVH_KEY_BITS)?,
             presplit: None,
             rounds: TreeletRounds::new(ctx),
             collapse: Collapse::new(ctx)?,
