@@ -1,4 +1,4 @@
-// Add-back of the multi-level exclusive scan of `sort::RadixSort`: after counts_scan.wgsl scanned
+// Add-back of the multi-level exclusive scan `sort::PrefixScan`: after counts_scan.wgsl scanned
 // each SCAN_BLOCK of `data` locally and the next level scanned the block totals `sums`, every element
 // of block b gets sums[b] added, which makes the scan of `data` global.
 // Blocks are linear workgroup indices over a 1D or 2D grid: wid.x + wid.y * num_workgroups.x.

@@ -1,10 +1,8 @@
-// Exclusive prefix sum, one level of the multi-level scan of `sort::RadixSort` (reduce-then-scan
-// step 2): each workgroup scans its block of SCAN_BLOCK = 4096 u32s of `data` in place (16
-// consecutive per invocation, then a Hillis-Steele scan of the 256 invocation totals in workgroup
-// memory) and
-// writes the block's total to sums[block]. The caller scans `sums` the same way (the next level,
-// its own dispatch) and adds it back with counts_add.wgsl; a length of at most SCAN_BLOCK needs this
-// one dispatch only.
+// Exclusive prefix sum, one level of the multi-level scan `sort::PrefixScan`: each workgroup scans
+// its block of SCAN_BLOCK = 4096 u32s of `data` in place (16 consecutive per invocation, then a
+// Hillis-Steele scan of the 256 invocation totals in workgroup memory) and writes the block's total
+// to sums[block]. The caller scans `sums` the same way (the next level, its own dispatch) and adds
+// it back with counts_add.wgsl; a length of at most SCAN_BLOCK needs this one dispatch only.
 // Blocks are linear workgroup indices over a 1D or 2D grid: wid.x + wid.y * num_workgroups.x.
 #include "constants.wgsl"
 

@@ -1,7 +1,7 @@
 // Radix-sort histogram, step 1 of each LSD pass of `sort::RadixSort` (reduce-then-scan): each
 // workgroup counts the 4-bit digits at `params.shift` (only the low `params.bits` of them) of its
-// tile of SORT_TILE keys and writes the 16 counts digit-major, counts[digit * num_tiles + tile], so that
-// one exclusive scan of `counts` gives every (digit, tile) its first output position.
+// tile of SORT_TILE keys and writes the 16 counts digit-major, counts[digit * num_tiles + tile], from
+// which keys_scatter.wgsl sums every (digit, tile)'s first output position.
 // Counting without atomics: each invocation counts its keys (strided, coalesced loads) into 16
 // byte-wide counters packed in a vec4 (a one-hot add per key, all vector ALU), widens them to
 // 16-bit halves in workgroup memory, and a raking reduction sums the 256 invocations (2 barriers).

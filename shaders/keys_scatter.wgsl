@@ -1,7 +1,12 @@
-// Radix-sort stable scatter, step 3 of each LSD pass of `sort::RadixSort` (reduce-then-scan): each
+// Radix-sort stable scatter, step 2 of each LSD pass of `sort::RadixSort` (reduce-then-scan): each
 // workgroup ranks its tile of SORT_TILE (key, value) pairs stably by the 4-bit digit at `params.shift`
-// (low `params.bits` bits) and writes each pair to offsets[digit * num_tiles + tile] + rank, where
-// `offsets` is the exclusive scan of the keys_histogram.wgsl counts.
+// (low `params.bits` bits) and writes each pair to offset(digit, tile) + rank.
+//
+// The offsets without a scan pass: offset(d, t) = Σ_{d' < d} total(d') + Σ_{t' < t} count(d', t')
+// over the keys_histogram.wgsl counts. Each workgroup sums the 16 × num_tiles counts itself
+// (invocation lid adds digit lid / 16's counts of every 16th tile from lid % 16; then 16 sums per
+// digit, then the 16 digit totals): 16 · num_tiles reads per workgroup, a few kilobytes that stay
+// in cache, in place of a scan dispatch (or three) per pass.
 //
 // Stable ranking by per-invocation counting (the radix sort of Zagha & Blelloch 1991 for vector
 // multiprocessors, one "processor" per invocation): invocation i owns the contiguous pairs
@@ -18,7 +23,7 @@
 
 @group(0) @binding(1) var<storage, read> keys_in: array<vec2<u32>>;
 @group(0) @binding(2) var<storage, read> values_in: array<u32>;
-@group(0) @binding(3) var<storage, read> offsets: array<u32>;
+@group(0) @binding(3) var<storage, read> counts: array<u32>;
 @group(0) @binding(4) var<storage, read_write> keys_out: array<vec2<u32>>;
 @group(0) @binding(5) var<storage, read_write> values_out: array<u32>;
 // The item count's limit (`gpu::ItemCount`): the sort orders the first `sort_count()` pairs.
@@ -31,11 +36,50 @@ fn pick(v: vec4<u32>, i: u32) -> u32 {
     return select(select(v.x, v.y, i == 1u), select(v.z, v.w, i == 3u), i >= 2u);
 }
 
+// First output position of each digit's pairs of this tile (`tile_offsets`).
+var<workgroup> tile_offsets: array<u32, 16>;
+
+// Fills `tile_offsets`: offset(d, tile) from the counts of all tiles (see the header). Uses
+// `digit_counts` as scratch; ends with a barrier.
+fn compute_tile_offsets(lid: u32, tile: u32) {
+    let d = lid >> 4u;
+    var before = 0u;
+    var total = 0u;
+    for (var t = lid & 15u; t < params.num_tiles; t += 16u) {
+        let c = counts[d * params.num_tiles + t];
+        total += c;
+        before += select(0u, c, t < tile);
+    }
+    digit_counts[lid] = before;
+    digit_counts[WORKGROUP + lid] = total;
+    workgroupBarrier();
+    // Invocation d < 16: digit d's sums over the 16 stripes, then the totals of the digits below.
+    if lid < 16u {
+        var digit_before = 0u;
+        var digit_total = 0u;
+        for (var s = 0u; s < 16u; s++) {
+            digit_before += digit_counts[lid * 16u + s];
+            digit_total += digit_counts[WORKGROUP + lid * 16u + s];
+        }
+        digit_counts[2u * WORKGROUP + lid] = digit_total;
+        tile_offsets[lid] = digit_before;
+    }
+    workgroupBarrier();
+    if lid < 16u {
+        var base = 0u;
+        for (var d = 0u; d < lid; d++) {
+            base += digit_counts[2u * WORKGROUP + d];
+        }
+        tile_offsets[lid] += base;
+    }
+    workgroupBarrier();
+}
+
 // First output position of digit d for invocation lid's pairs.
-fn first_slot(d: u32, lid: u32, tile: u32) -> u32 {
+fn first_slot(d: u32, lid: u32) -> u32 {
     let w = d >> 1u;
     let local = digit_counts[w * WORKGROUP + lid] + segments[w * 32u + lid / 8u];
-    return offsets[d * params.num_tiles + tile] + ((local >> ((d & 1u) * 16u)) & 0xffffu);
+    return tile_offsets[d] + ((local >> ((d & 1u) * 16u)) & 0xffffu);
 }
 
 @compute @workgroup_size(256)
@@ -48,6 +92,7 @@ fn main(
     if tile >= params.num_tiles {
         return;
     }
+    compute_tile_offsets(lid, tile);
     let first = tile * SORT_TILE + lid * ITEMS;
     let n = sort_count();
     var count = vec4<u32>(0u);
@@ -81,10 +126,10 @@ fn main(
         }
     }
     workgroupBarrier();
-    let slots0 = vec4<u32>(first_slot(0u, lid, tile), first_slot(1u, lid, tile), first_slot(2u, lid, tile), first_slot(3u, lid, tile));
-    let slots1 = vec4<u32>(first_slot(4u, lid, tile), first_slot(5u, lid, tile), first_slot(6u, lid, tile), first_slot(7u, lid, tile));
-    let slots2 = vec4<u32>(first_slot(8u, lid, tile), first_slot(9u, lid, tile), first_slot(10u, lid, tile), first_slot(11u, lid, tile));
-    let slots3 = vec4<u32>(first_slot(12u, lid, tile), first_slot(13u, lid, tile), first_slot(14u, lid, tile), first_slot(15u, lid, tile));
+    let slots0 = vec4<u32>(first_slot(0u, lid), first_slot(1u, lid), first_slot(2u, lid), first_slot(3u, lid));
+    let slots1 = vec4<u32>(first_slot(4u, lid), first_slot(5u, lid), first_slot(6u, lid), first_slot(7u, lid));
+    let slots2 = vec4<u32>(first_slot(8u, lid), first_slot(9u, lid), first_slot(10u, lid), first_slot(11u, lid));
+    let slots3 = vec4<u32>(first_slot(12u, lid), first_slot(13u, lid), first_slot(14u, lid), first_slot(15u, lid));
     var seen = vec4<u32>(0u);
     for (var i = 0u; i < ITEMS; i++) {
         let item = first + i;

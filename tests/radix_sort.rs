@@ -91,9 +91,10 @@ fn two_dimensional_grids() {
 }
 
 #[test]
-fn two_level_scan() {
-    // 2,200,000 pairs give 269 tiles, 4,304 counts: two scan levels and an add-back. 12-bit
-    // keys: three passes, so also the copy to the scratch buffers that odd pass counts start with.
+fn many_tiles_and_an_odd_pass_count() {
+    // 2,200,000 pairs give 269 tiles: each scatter workgroup sums 16 × 269 digit counts for its
+    // offsets, in stripes of 17 and 16 tiles. 12-bit keys: three passes, so also the copy to the
+    // scratch buffers that odd pass counts start with.
     let mut sorter = RadixSort::new(gpu());
     check(&mut sorter, &random_keys(2_200_000, 12, 22), 12);
 }

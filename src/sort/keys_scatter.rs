@@ -1,6 +1,7 @@
-//! Radix sort step 3 (kernel `keys_scatter`): stable ranking within the tile by per-invocation
-//! counting (Zagha & Blelloch 1991, one "processor" per invocation) and the scatter of each
-//! (key, value) pair to `offset[digit, tile] + rank`.
+//! Radix sort step 2 (kernel `keys_scatter`): the tile's first output slot per digit, summed from
+//! the digit counts of all tiles, stable ranking within the tile by per-invocation counting
+//! (Zagha & Blelloch 1991, one "processor" per invocation) and the scatter of each (key, value)
+//! pair to `offset[digit, tile] + rank`.
 
 use super::radix_sort::SortParams;
 use crate::gpu::kernel;

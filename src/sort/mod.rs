@@ -1,7 +1,8 @@
-//! Sorting on the GPU: the portable LSD radix sort of (64-bit Morton key, u32 value) pairs that is
-//! the sort stage of the LBVH builder (Karras 2012), reduce-then-scan per 4-bit digit (histogram,
-//! multi-level exclusive scan, stable scatter; Satish et al. 2009 / Merrill & Grimshaw 2010 without
-//! decoupled look-back), plus its CPU twin as the test oracle.
+//! Sorting and scanning on the GPU: the portable LSD radix sort of (64-bit Morton key, u32 value)
+//! pairs that is the sort stage of the LBVH builder (Karras 2012), reduce-then-scan per 4-bit digit
+//! (histogram, then offsets summed per tile and a stable scatter; Satish et al. 2009 / Merrill &
+//! Grimshaw 2010 without decoupled look-back), plus its CPU twin as the test oracle; and the
+//! multi-level exclusive prefix scan that BVH compaction and pre-splitting use.
 
 mod counts_add;
 mod counts_scan;

@@ -4,16 +4,15 @@
 //! Method: reduce-then-scan per 4-bit digit (Satish, Harris & Garland 2009; Merrill & Grimshaw
 //! 2010), no decoupled look-back and no cross-workgroup waiting of any kind, no subgroup
 //! operations, no atomics, 9 KiB of workgroup memory and 256 invocations per workgroup. Each of
-//! the ceil(key_bits / 4) passes records, in one compute pass for the whole sort:
+//! the ceil(key_bits / 4) passes records two dispatches, in one compute pass for the whole sort:
 //!
 //! 1. `keys_histogram.wgsl`: per tile of [`SORT_TILE`] keys, the 16 digit counts, stored
 //!    digit-major (`counts[digit * tiles + tile]`);
-//! 2. `counts_scan.wgsl` once per level (blocks of 4096, block totals to the next level) and
-//!    `counts_add.wgsl` once per level but the top (adds the scanned block totals back): an
-//!    exclusive scan of `counts` of any length, so each (digit, tile) gets its first output slot;
-//! 3. `keys_scatter.wgsl`: stable ranking within the tile by per-invocation counting (Zagha &
-//!    Blelloch 1991, one "processor" per invocation; see the kernel) and the scatter to
-//!    `offset[digit, tile] + rank`.
+//! 2. `keys_scatter.wgsl`: each tile's first output slot per digit, summed by the workgroup from
+//!    the counts of all tiles (16 × tiles words, which stay in cache: this replaces the scan
+//!    dispatches between the two kernels), stable ranking within the tile by per-invocation
+//!    counting (Zagha & Blelloch 1991, one "processor" per invocation; see the kernel) and the
+//!    scatter to `offset[digit, tile] + rank`.
 //!
 //! Digit width: 4 bits, measured about 2.5x faster on the software driver (lavapipe, 2 cores,
 //! 1M pairs, 63-bit keys: about 0.14 s) than 8-bit digits ranked by workgroup-memory "ballots"
@@ -21,7 +20,7 @@
 //! counters per invocation, so counting and ranking are a few vector instructions per pair with
 //! three barriers per tile, which more than pays for twice the passes.
 //!
-//! Kernels: `keys_histogram`, `counts_scan` / `counts_add` (via `PrefixScan`), `keys_scatter`.
+//! Kernels: `keys_histogram`, `keys_scatter`.
 //! Passes ping-pong between the caller's buffers and internal scratch buffers, so that the result
 //! ends in the caller's buffers; with an odd number of passes the input is first copied to the
 //! scratch buffers (a buffer copy recorded before the compute pass), so the caller's buffers need
@@ -33,7 +32,6 @@ use bytemuck::{Pod, Zeroable};
 
 use super::keys_histogram::KEYS_HISTOGRAM;
 use super::keys_scatter::KEYS_SCATTER;
-use super::prefix_scan::PrefixScan;
 pub use crate::gpu::constants::{RADIX_BITS, SORT_TILE};
 use crate::gpu::{
     read_buffer, storage_buffer, storage_buffer_zeroed, GpuContext, Grid, ItemCount, Kernel,
@@ -85,7 +83,6 @@ impl Scratch {
 /// The GPU radix sort: kernels created once per device, scratch buffers grown on demand.
 pub struct RadixSort {
     histogram: Kernel<SortParams>,
-    scan: PrefixScan,
     scatter: Kernel<SortParams>,
     scratch: Option<Scratch>,
     max_workgroups_per_dimension: u32,
@@ -97,7 +94,6 @@ impl RadixSort {
     pub fn new(ctx: &GpuContext) -> Self {
         Self {
             histogram: Kernel::new(ctx, &KEYS_HISTOGRAM),
-            scan: PrefixScan::new(ctx),
             scatter: Kernel::new(ctx, &KEYS_SCATTER),
             scratch: None,
             max_workgroups_per_dimension: u32::MAX,
@@ -109,7 +105,6 @@ impl RadixSort {
     /// inputs already take the 2D-grid path that inputs past 65,535 workgroups need (tests).
     pub fn with_max_workgroups_per_dimension(mut self, max: u32) -> Self {
         self.max_workgroups_per_dimension = max.max(1);
-        self.scan.set_max_workgroups_per_dimension(max);
         self
     }
 
@@ -122,9 +117,8 @@ impl RadixSort {
     /// to the capacity on demand; several sorts may be recorded into one recording.
     ///
     /// Everything is one compute pass, named "sort" (timestamped when the recording has a timer;
-    /// also for `len` ≤ 1, where the pass is empty). The pass holds ceil(key_bits / 4) ×
-    /// (1 + 2 × levels) dispatches, levels = scan levels of the len / 512 counts (1 up to 2,097,152
-    /// pairs, else 2).
+    /// also for `len` ≤ 1, where the pass is empty). The pass holds 2 × ceil(key_bits / 4)
+    /// dispatches.
     pub fn record(
         &mut self,
         rec: &mut Recorder<'_>,
@@ -166,8 +160,6 @@ impl RadixSort {
             .max_workgroups_per_dimension
             .min(ctx.device.limits().max_compute_workgroups_per_dimension);
         let tile_grid = Grid::items_capped(num_tiles, 1, max);
-        let counts_len = num_tiles * RADIX;
-        self.scan.reserve(ctx, counts_len)?;
 
         // Pass p reads `src` and writes `dst`; the last pass writes the caller's buffers.
         let (mut src, mut dst) = ((keys, values), (&scratch.keys, &scratch.values));
@@ -193,7 +185,6 @@ impl RadixSort {
                 &params,
                 &[src.0, &scratch.counts, limit],
             );
-            self.scan.record(&mut pass, &scratch.counts, counts_len)?;
             pass.dispatch(
                 &self.scatter,
                 tile_grid,
