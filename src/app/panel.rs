@@ -459,14 +459,19 @@ fn build_times(ui: &mut egui::Ui, stats: &FrameStats, per_frame: bool) {
     } else {
         "last build"
     };
-    ui.label(format!("build: {:.2} ms ({clock}, {when})", build.total_ms));
+    let dispatches: u32 = build.stages.iter().map(|s| s.dispatches).sum();
+    ui.label(format!(
+        "build: {:.2} ms ({clock}, {when}) · {dispatches} dispatches",
+        build.total_ms
+    ))
+    .on_hover_text("A real GPU pays a fixed few µs per compute dispatch besides its work");
     let max_ms = build
         .stages
         .iter()
         .filter_map(|s| s.ms)
         .fold(0.0f64, f64::max);
     egui::Grid::new("stages")
-        .num_columns(3)
+        .num_columns(4)
         .striped(true)
         .show(ui, |ui| {
             for stage in &build.stages {
@@ -481,6 +486,11 @@ fn build_times(ui: &mut egui::Ui, stats: &FrameStats, per_frame: bool) {
                         ui.label("n/a");
                         ui.label("");
                     }
+                }
+                if stage.dispatches > 0 {
+                    ui.label(format!("{}×", stage.dispatches));
+                } else {
+                    ui.label("");
                 }
                 ui.end_row();
             }
