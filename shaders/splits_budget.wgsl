@@ -2,34 +2,38 @@
 // budget Σ s_t ≤ β·N. With q = p³ and E = D³, s_t = the largest k ≤ MAX_SPLITS with k³ ≤ E·q_t
 // (exact in f32 on every device: k³ ≤ 32768 and the product is correctly rounded). E is the largest
 // bit pattern below hi = (budget+1)³ / q_max whose sum fits (non-negative floats order like their
-// bits). The search narrows [lo, hi) on the bit patterns: each step evaluates the sums at
+// bits). The search narrows [0, hi) on the bit patterns: each step evaluates the sums at
 // SPLIT_SEARCH_CANDIDATES evenly spaced patterns at once and keeps the gap after the last one that
-// fits, a 16-ary search that needs 8 steps (2 dispatches each) where bisection needs 32.
-// Entry points, dispatched in order: `init_search` (one invocation: [0, hi)), then per step
-// `count_splits` (per triangle: its s_t at every candidate, summed per workgroup, then globally)
-// and `narrow_search` (one invocation: keep the gap), and last `write_counts` (per triangle: its
+// fits, a 16-ary search that needs 8 steps where bisection needs 32.
+// Every step's sums go to their own words of `budget_state` (zeroed before the stage), so the
+// interval before step k is a function of the sums of steps 0..k-1 that each workgroup replays
+// itself (`search_interval`): one dispatch per step, no dispatch to narrow the interval.
+// Entry points, dispatched in order: per step `count_splits` (per triangle: its s_t at every
+// candidate, summed per workgroup, then globally), and last `write_counts` (per triangle: its
 // reference count s_t + 1 at the final lower bound, the input of the offsets scan).
 
 struct BudgetParams {
     count: u32,
     row_pitch: u32,
     budget: u32,
-    pad: u32,
+    // count_splits: the search step (0-based).
+    step: u32,
 }
 
 #include "constants.wgsl"
 
-// [0] largest q (bits), [1] lo, [2] hi (bits of E), [3 + j] Σ s_t at candidate j
+// [0] largest q (bits; triangles_priority.wgsl), [1 + k·CANDIDATES + j] Σ s_t at candidate j of
+// step k, [SCALE_WORD] the scale found (bits of E; written by write_counts, read by tests).
 @group(0) @binding(0) var<uniform> params: BudgetParams;
 @group(0) @binding(1) var<storage, read> priorities: array<f32>;
 @group(0) @binding(2) var<storage, read_write> budget_state: array<atomic<u32>>;
 @group(0) @binding(3) var<storage, read_write> ref_counts: array<u32>;
 
-const LO: u32 = 1u;
-const HI: u32 = 2u;
-const SUMS: u32 = 3u;
+const SCALE_WORD: u32 = 1u + SPLIT_SEARCH_STEPS * SPLIT_SEARCH_CANDIDATES;
 
 var<workgroup> workgroup_sums: array<atomic<u32>, SPLIT_SEARCH_CANDIDATES>;
+// The search interval [lo, hi) of this dispatch's step (bit patterns of E).
+var<workgroup> interval: vec2<u32>;
 
 // The largest k ≤ MAX_SPLITS (31) with k³ ≤ e·q, by binary search over k.
 fn splits_at(e: f32, q: f32) -> u32 {
@@ -52,19 +56,32 @@ fn candidate(lo: u32, hi: u32, j: u32) -> u32 {
     return lo + (range / parts) * (j + 1u) + ((range % parts) * (j + 1u)) / parts;
 }
 
-@compute @workgroup_size(1)
-fn init_search() {
+// The interval before step `steps`: [0, (budget + 1)³ / q_max), narrowed by the sums of steps
+// 0..steps-1. Sums grow with the candidate: each step keeps the gap from the last candidate that
+// fits (or lo) to the next one (or hi).
+fn search_interval(steps: u32) -> vec2<u32> {
     let q_max = bitcast<f32>(atomicLoad(&budget_state[0]));
     let b = f32(params.budget + 1u);
-    var hi = 0.0;
+    var lo = 0u;
+    var hi = 0u;
     if q_max > 0.0 {
-        hi = b * b * b / q_max;
+        hi = bitcast<u32>(b * b * b / q_max);
     }
-    atomicStore(&budget_state[LO], 0u);
-    atomicStore(&budget_state[HI], bitcast<u32>(hi));
-    for (var j = 0u; j < SPLIT_SEARCH_CANDIDATES; j++) {
-        atomicStore(&budget_state[SUMS + j], 0u);
+    for (var k = 0u; k < steps; k++) {
+        var new_lo = lo;
+        var new_hi = hi;
+        for (var j = 0u; j < SPLIT_SEARCH_CANDIDATES; j++) {
+            let c = candidate(lo, hi, j);
+            if atomicLoad(&budget_state[1u + k * SPLIT_SEARCH_CANDIDATES + j]) <= params.budget {
+                new_lo = c;
+            } else if new_hi == hi {
+                new_hi = c;
+            }
+        }
+        lo = new_lo;
+        hi = new_hi;
     }
+    return vec2<u32>(lo, hi);
 }
 
 @compute @workgroup_size(64)
@@ -72,12 +89,15 @@ fn count_splits(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_in
     if lid < SPLIT_SEARCH_CANDIDATES {
         atomicStore(&workgroup_sums[lid], 0u);
     }
+    if lid == 0u {
+        interval = search_interval(params.step);
+    }
     workgroupBarrier();
     let i = gid.x + gid.y * params.row_pitch;
     if i < params.count {
         let q = priorities[i];
-        let lo = atomicLoad(&budget_state[LO]);
-        let hi = atomicLoad(&budget_state[HI]);
+        let lo = interval.x;
+        let hi = interval.y;
         // s_t grows with E: nothing to add below the first candidate where it is not zero.
         if splits_at(bitcast<f32>(candidate(lo, hi, SPLIT_SEARCH_CANDIDATES - 1u)), q) > 0u {
             for (var j = 0u; j < SPLIT_SEARCH_CANDIDATES; j++) {
@@ -92,36 +112,22 @@ fn count_splits(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_in
     if lid < SPLIT_SEARCH_CANDIDATES {
         let sum = atomicLoad(&workgroup_sums[lid]);
         if sum > 0u {
-            atomicAdd(&budget_state[SUMS + lid], sum);
+            atomicAdd(&budget_state[1u + params.step * SPLIT_SEARCH_CANDIDATES + lid], sum);
         }
     }
-}
-
-@compute @workgroup_size(1)
-fn narrow_search() {
-    let lo = atomicLoad(&budget_state[LO]);
-    let hi = atomicLoad(&budget_state[HI]);
-    // Sums grow with the candidate: the new interval starts at the last one that fits (or lo) and
-    // ends at the next one (or hi).
-    var new_lo = lo;
-    var new_hi = hi;
-    for (var j = 0u; j < SPLIT_SEARCH_CANDIDATES; j++) {
-        let c = candidate(lo, hi, j);
-        if atomicLoad(&budget_state[SUMS + j]) <= params.budget {
-            new_lo = c;
-        } else if new_hi == hi {
-            new_hi = c;
-        }
-        atomicStore(&budget_state[SUMS + j], 0u);
-    }
-    atomicStore(&budget_state[LO], new_lo);
-    atomicStore(&budget_state[HI], new_hi);
 }
 
 @compute @workgroup_size(64)
-fn write_counts(@builtin(global_invocation_id) gid: vec3<u32>) {
+fn write_counts(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    if lid == 0u {
+        interval = search_interval(SPLIT_SEARCH_STEPS);
+    }
+    workgroupBarrier();
     let i = gid.x + gid.y * params.row_pitch;
+    if i == 0u {
+        atomicStore(&budget_state[SCALE_WORD], interval.x);
+    }
     if i < params.count {
-        ref_counts[i] = splits_at(bitcast<f32>(atomicLoad(&budget_state[LO])), priorities[i]) + 1u;
+        ref_counts[i] = splits_at(bitcast<f32>(interval.x), priorities[i]) + 1u;
     }
 }

@@ -18,6 +18,7 @@ pub const MAX_SPLITS: u32 = 31;
 /// Candidate scales the pre-splitting budget search evaluates per step (`splits_budget.wgsl`):
 /// 15 split the interval in 16, so `SPLIT_SEARCH_STEPS` steps narrow 2^32 bit patterns to one.
 pub const SPLIT_SEARCH_CANDIDATES: u32 = 15;
+/// Steps of the pre-splitting budget search (one dispatch each).
 pub const SPLIT_SEARCH_STEPS: u32 = 8;
 /// Largest treelet (leaves): each treelet invocation keeps the costs of its 2^8 subsets and
 /// the boxes of two halves of 4 leaves (`treelet_dp.wgsl`).
@@ -49,6 +50,7 @@ pub fn wgsl() -> String {
         u32_const("MORTON_AXIS_BITS", MORTON_AXIS_BITS),
         u32_const("MAX_SPLITS", MAX_SPLITS),
         u32_const("SPLIT_SEARCH_CANDIDATES", SPLIT_SEARCH_CANDIDATES),
+        u32_const("SPLIT_SEARCH_STEPS", SPLIT_SEARCH_STEPS),
         u32_const("MAX_TREELET", MAX_TREELET_SIZE),
         u32_const("MAX_GPU_LEAF_SIZE", MAX_GPU_LEAF_SIZE),
         u32_const("MAX_LEVEL_DISPATCHES", MAX_LEVEL_DISPATCHES),

@@ -16,9 +16,7 @@ pub use cpu::{
     budget_scale, presplit_cpu, split_importance, split_priority, split_triangle, splits_at,
     SplitGrid,
 };
-pub use splits_budget::{
-    SPLITS_COUNT, SPLITS_INIT_SEARCH, SPLITS_NARROW_SEARCH, SPLITS_WRITE_COUNTS,
-};
+pub use splits_budget::{SPLITS_COUNT, SPLITS_WRITE_COUNTS};
 pub use triangles_priority::TRIANGLES_PRIORITY;
 pub use triangles_split::TRIANGLES_SPLIT;
 
@@ -29,11 +27,14 @@ use crate::device::Geometry;
 use crate::geometry::GpuAabb;
 use crate::gpu::constants::{SPLIT_SEARCH_CANDIDATES, SPLIT_SEARCH_STEPS};
 use crate::gpu::{
-    read_buffer, storage_buffer_zeroed, GpuContext, Grid, ItemCount, Items, Kernel, ParamSlab,
-    Recorder,
+    read_buffer, storage_buffer_zeroed, GpuContext, ItemCount, Items, Kernel, ParamSlab, Recorder,
 };
 use crate::sort::PrefixScan;
 use crate::Result;
+
+/// Word of the budget state that holds the scale found (after q_max and every step's sums; see
+/// `splits_budget.wgsl`).
+const SCALE_WORD: u32 = 1 + SPLIT_SEARCH_STEPS * SPLIT_SEARCH_CANDIDATES;
 
 /// Extra references allowed for `triangles` triangles at β = `percent` / 100.
 pub fn split_budget(triangles: u32, percent: u32) -> u32 {
@@ -64,9 +65,7 @@ pub struct PreSplitter {
     triangle_bounds: TrianglesBounds,
     scene_bounds: CentroidsReduce,
     priority: Kernel<Items>,
-    init_search: Kernel<BudgetParams>,
     count_splits: Kernel<BudgetParams>,
-    narrow_search: Kernel<BudgetParams>,
     write_counts: Kernel<BudgetParams>,
     split: Kernel<Items>,
     scan: PrefixScan,
@@ -80,9 +79,7 @@ impl PreSplitter {
             triangle_bounds: TrianglesBounds::new(ctx),
             scene_bounds: CentroidsReduce::new(ctx),
             priority: Kernel::new(ctx, &TRIANGLES_PRIORITY),
-            init_search: Kernel::new(ctx, &SPLITS_INIT_SEARCH),
             count_splits: Kernel::new(ctx, &SPLITS_COUNT),
-            narrow_search: Kernel::new(ctx, &SPLITS_NARROW_SEARCH),
             write_counts: Kernel::new(ctx, &SPLITS_WRITE_COUNTS),
             split: Kernel::new(ctx, &TRIANGLES_SPLIT),
             scan: PrefixScan::new(ctx),
@@ -120,7 +117,7 @@ impl PreSplitter {
                 budget_state: storage_buffer_zeroed(
                     ctx,
                     "split budget state",
-                    u64::from(3 + SPLIT_SEARCH_CANDIDATES) * 4,
+                    u64::from(SCALE_WORD + 1) * 4,
                 )?,
                 ref_offsets: storage_buffer_zeroed(ctx, "reference offsets", u64::from(n) * 4)?,
             });
@@ -143,13 +140,12 @@ impl PreSplitter {
         let levels = CentroidsReduce::level_count(n);
         let scene_box = &s.bounds_levels[levels - 1];
         let grid = self.priority.grid(ctx, n);
-        let budget_params = BudgetParams {
+        let mut budget_params = BudgetParams {
             count: n,
             row_pitch: grid.row_pitch,
             budget,
-            _pad: 0,
+            step: 0,
         };
-        let one = Grid::workgroups(1, 1);
         let budget_buffers = [&s.priorities, &s.budget_state, &s.ref_offsets];
         rec.encoder().clear_buffer(&s.budget_state, 0, None);
         {
@@ -174,10 +170,9 @@ impl PreSplitter {
                     scene_box,
                 ],
             );
-            pass.dispatch(&self.init_search, one, &budget_params, &budget_buffers);
-            for _ in 0..SPLIT_SEARCH_STEPS {
+            for step in 0..SPLIT_SEARCH_STEPS {
+                budget_params.step = step;
                 pass.dispatch(&self.count_splits, grid, &budget_params, &budget_buffers);
-                pass.dispatch(&self.narrow_search, one, &budget_params, &budget_buffers);
             }
             pass.dispatch(&self.write_counts, grid, &budget_params, &budget_buffers);
             self.scan.record(&mut pass, &s.ref_offsets, n)?;
@@ -219,11 +214,10 @@ impl PreSplitter {
         rec.submit();
         let total = read_buffer::<u32>(ctx, self.total(), 1)?[0];
         let s = self.scratch.as_ref().expect("recorded above");
-        // [0] q_max, [1] lo: the scale found.
-        let state: Vec<u32> = read_buffer(ctx, &s.budget_state, 2)?;
+        let state: Vec<u32> = read_buffer(ctx, &s.budget_state, SCALE_WORD as usize + 1)?;
         Ok(SplitStages {
             priorities: read_buffer(ctx, &s.priorities, geometry.triangle_count as usize)?,
-            scale: f32::from_bits(state[1]),
+            scale: f32::from_bits(state[SCALE_WORD as usize]),
             boxes: read_buffer(ctx, &boxes, total as usize)?,
             ref_tris: read_buffer(
                 ctx,

@@ -1,7 +1,8 @@
 //! Pre-splitting step 2 (kernel `splits_budget`; Karras & Aila 2013, §5): the split counts under
 //! the budget, by a 16-ary search of the scale E on its bit patterns (`SPLIT_SEARCH_STEPS` steps
-//! of `SPLIT_SEARCH_CANDIDATES` candidates). Four entry points, dispatched in order:
-//! `init_search`, then per step `count_splits` and `narrow_search`, and last `write_counts`.
+//! of `SPLIT_SEARCH_CANDIDATES` candidates, each step's sums kept, so that every workgroup replays
+//! the interval). Two entry points, dispatched in order: per step `count_splits`, and last
+//! `write_counts`.
 //! CPU twin: `budget_scale` (the same E by bisection) and `splits_at`.
 
 use bytemuck::{Pod, Zeroable};
@@ -14,22 +15,14 @@ pub struct BudgetParams {
     pub count: u32,
     pub row_pitch: u32,
     pub budget: u32,
-    pub _pad: u32,
+    /// `count_splits`: the search step.
+    pub step: u32,
 }
 
 kernel!(
-    /// One invocation: the search interval [0, hi) with hi = (budget + 1)³ / q_max.
-    pub SPLITS_INIT_SEARCH: BudgetParams = "splits_budget"::"init_search", [1, 1, 1],
-    [Read, ReadWrite, ReadWrite]
-);
-kernel!(
-    /// Per triangle: Σ s_t at each of the step's candidates.
+    /// Per triangle: Σ s_t at each of the step's candidates (the interval replayed from the
+    /// sums of the steps before).
     pub SPLITS_COUNT: BudgetParams = "splits_budget"::"count_splits", [64, 1, 1],
-    [Read, ReadWrite, ReadWrite]
-);
-kernel!(
-    /// One invocation: keeps the gap after the last candidate whose sum fits.
-    pub SPLITS_NARROW_SEARCH: BudgetParams = "splits_budget"::"narrow_search", [1, 1, 1],
     [Read, ReadWrite, ReadWrite]
 );
 kernel!(
