@@ -23,13 +23,11 @@ struct BudgetParams {
 #include "constants.wgsl"
 
 // [0] largest q (bits; triangles_priority.wgsl), [1 + k·CANDIDATES + j] Σ s_t at candidate j of
-// step k, [SCALE_WORD] the scale found (bits of E; written by write_counts, read by tests).
+// step k, [SPLIT_SCALE_WORD] the scale found (bits of E; written by write_counts, read by tests).
 @group(0) @binding(0) var<uniform> params: BudgetParams;
 @group(0) @binding(1) var<storage, read> priorities: array<f32>;
 @group(0) @binding(2) var<storage, read_write> budget_state: array<atomic<u32>>;
 @group(0) @binding(3) var<storage, read_write> ref_counts: array<u32>;
-
-const SCALE_WORD: u32 = 1u + SPLIT_SEARCH_STEPS * SPLIT_SEARCH_CANDIDATES;
 
 var<workgroup> workgroup_sums: array<atomic<u32>, SPLIT_SEARCH_CANDIDATES>;
 // The search interval [lo, hi) of this dispatch's step (bit patterns of E).
@@ -125,7 +123,7 @@ fn write_counts(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_in
     workgroupBarrier();
     let i = gid.x + gid.y * params.row_pitch;
     if i == 0u {
-        atomicStore(&budget_state[SCALE_WORD], interval.x);
+        atomicStore(&budget_state[SPLIT_SCALE_WORD], interval.x);
     }
     if i < params.count {
         ref_counts[i] = splits_at(bitcast<f32>(interval.x), priorities[i]) + 1u;

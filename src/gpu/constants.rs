@@ -20,6 +20,9 @@ pub const MAX_SPLITS: u32 = 31;
 pub const SPLIT_SEARCH_CANDIDATES: u32 = 15;
 /// Steps of the pre-splitting budget search (one dispatch each).
 pub const SPLIT_SEARCH_STEPS: u32 = 8;
+/// Word of the budget search's state that holds the scale found: after q_max and the sums of
+/// every step's candidates (`splits_budget.wgsl`).
+pub const SPLIT_SCALE_WORD: u32 = 1 + SPLIT_SEARCH_STEPS * SPLIT_SEARCH_CANDIDATES;
 /// Largest treelet (leaves): each treelet invocation keeps the costs of its 2^8 subsets and
 /// the boxes of two halves of 4 leaves (`treelet_dp.wgsl`).
 pub const MAX_TREELET_SIZE: u32 = 8;
@@ -51,6 +54,7 @@ pub fn wgsl() -> String {
         u32_const("MAX_SPLITS", MAX_SPLITS),
         u32_const("SPLIT_SEARCH_CANDIDATES", SPLIT_SEARCH_CANDIDATES),
         u32_const("SPLIT_SEARCH_STEPS", SPLIT_SEARCH_STEPS),
+        u32_const("SPLIT_SCALE_WORD", SPLIT_SCALE_WORD),
         u32_const("MAX_TREELET", MAX_TREELET_SIZE),
         u32_const("MAX_GPU_LEAF_SIZE", MAX_GPU_LEAF_SIZE),
         u32_const("MAX_LEVEL_DISPATCHES", MAX_LEVEL_DISPATCHES),

@@ -18,8 +18,7 @@ pub use centroids_reduce::{
 };
 pub use lbvh_hierarchy::{hierarchy_cpu, Hierarchy, LBVH_HIERARCHY};
 pub use morton_compute::{
-    morton_key, morton_keys_cpu, MortonParams, LBVH_KEY_BITS, MORTON_BITS, MORTON_COMPUTE,
-    TRBVH_KEY_BITS,
+    morton_key, morton_keys_cpu, LBVH_KEY_BITS, MORTON_BITS, MORTON_COMPUTE, TRBVH_KEY_BITS,
 };
 pub use triangles_bounds::{prim_boxes_cpu, TrianglesBounds, TRIANGLES_BOUNDS};
 
@@ -109,8 +108,6 @@ pub struct LbvhBuilder {
     sort: RadixSort,
     hierarchy: LbvhHierarchy,
     refit: BoundsRefit,
-    /// The high bits of the full Morton key that the keys keep (`morton_compute`).
-    key_bits: u32,
     scratch: Option<Scratch>,
     /// Parameters of the builds this builder records and submits itself (`build`).
     params: ParamSlab,
@@ -124,11 +121,10 @@ impl LbvhBuilder {
         Self {
             triangles_bounds: TrianglesBounds::new(ctx),
             centroids: CentroidsReduce::new(ctx),
-            morton: MortonCompute::new(ctx),
+            morton: MortonCompute::new(ctx, LBVH_KEY_BITS),
             sort: RadixSort::new(ctx),
             hierarchy: LbvhHierarchy::new(ctx),
             refit: BoundsRefit::new(ctx),
-            key_bits: LBVH_KEY_BITS,
             scratch: None,
             params: ParamSlab::new(ctx),
         }
@@ -141,13 +137,8 @@ impl LbvhBuilder {
                 "Morton key bits must be 1..={MORTON_BITS}, got {key_bits}"
             )));
         }
-        self.key_bits = key_bits;
+        self.morton.key_bits = key_bits;
         Ok(self)
-    }
-
-    /// The key width of this builder's builds.
-    pub fn key_bits(&self) -> u32 {
-        self.key_bits
     }
 
     /// Builds `geometry`'s tree into `tree` in one submission and waits; returns the per-stage
@@ -299,7 +290,6 @@ impl LbvhBuilder {
             &mut pass,
             &scratch.prim_boxes,
             count,
-            self.key_bits,
             &bounds_levels[levels - 1],
             &scratch.keys,
             order,
@@ -317,7 +307,7 @@ impl LbvhBuilder {
     ) -> Result<()> {
         let scratch = self.scratch.as_ref().expect("reserved");
         self.sort
-            .record(rec, &scratch.keys, order, count, self.key_bits)?;
+            .record(rec, &scratch.keys, order, count, self.morton.key_bits)?;
         {
             let mut pass = rec.pass("hierarchy");
             self.hierarchy

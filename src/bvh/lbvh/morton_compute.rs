@@ -9,7 +9,7 @@ use glam::Vec3;
 
 use crate::geometry::Aabb;
 use crate::gpu::constants::{MORTON_AXIS_BITS, MORTON_GRID};
-use crate::gpu::{kernel, Grid, ItemCount, Kernel, Pass};
+use crate::gpu::{kernel, ItemCount, Kernel, Pass};
 
 /// Bits of the full key: `MORTON_AXIS_BITS` per axis.
 pub const MORTON_BITS: u32 = 3 * MORTON_AXIS_BITS;
@@ -60,36 +60,37 @@ pub fn morton_keys_cpu(prim_boxes: &[Aabb], bounds: &Aabb, key_bits: u32) -> Vec
         .collect()
 }
 
-/// The kernel `morton_compute`.
+/// The kernel `morton_compute`, and the width of the keys it writes.
 pub(crate) struct MortonCompute {
     kernel: Kernel<MortonParams>,
+    /// The high bits of the full key that the keys keep (1..=48).
+    pub key_bits: u32,
 }
 
 impl MortonCompute {
-    pub fn new(ctx: &crate::gpu::GpuContext) -> Self {
+    pub fn new(ctx: &crate::gpu::GpuContext, key_bits: u32) -> Self {
         Self {
             kernel: Kernel::new(ctx, &MORTON_COMPUTE),
+            key_bits,
         }
     }
 
     /// Records key computation over `count` primitive boxes: `keys[i]` (as `[lo, hi]`, the high
     /// `key_bits` of the full key) and `values[i] = i` (the permutation the sort reorders).
-    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         pass: &mut Pass<'_>,
         prim_boxes: &wgpu::Buffer,
         count: ItemCount<'_>,
-        key_bits: u32,
         centroid_bounds: &wgpu::Buffer,
         keys: &wgpu::Buffer,
         values: &wgpu::Buffer,
     ) {
-        let grid: Grid = self.kernel.grid(pass.ctx(), count.capacity());
+        let grid = self.kernel.grid(pass.ctx(), count.capacity());
         let params = MortonParams {
             count: count.capacity(),
             row_pitch: grid.row_pitch,
-            key_bits,
+            key_bits: self.key_bits,
             _pad: 0,
         };
         pass.dispatch(

@@ -25,16 +25,12 @@ use splits_budget::BudgetParams;
 use super::lbvh::{CentroidsReduce, TrianglesBounds};
 use crate::device::Geometry;
 use crate::geometry::GpuAabb;
-use crate::gpu::constants::{SPLIT_SEARCH_CANDIDATES, SPLIT_SEARCH_STEPS};
+use crate::gpu::constants::{SPLIT_SCALE_WORD, SPLIT_SEARCH_STEPS};
 use crate::gpu::{
     read_buffer, storage_buffer_zeroed, GpuContext, ItemCount, Items, Kernel, ParamSlab, Recorder,
 };
 use crate::sort::PrefixScan;
 use crate::Result;
-
-/// Word of the budget state that holds the scale found (after q_max and every step's sums; see
-/// `splits_budget.wgsl`).
-const SCALE_WORD: u32 = 1 + SPLIT_SEARCH_STEPS * SPLIT_SEARCH_CANDIDATES;
 
 /// Extra references allowed for `triangles` triangles at β = `percent` / 100.
 pub fn split_budget(triangles: u32, percent: u32) -> u32 {
@@ -117,7 +113,7 @@ impl PreSplitter {
                 budget_state: storage_buffer_zeroed(
                     ctx,
                     "split budget state",
-                    u64::from(SCALE_WORD + 1) * 4,
+                    u64::from(SPLIT_SCALE_WORD + 1) * 4,
                 )?,
                 ref_offsets: storage_buffer_zeroed(ctx, "reference offsets", u64::from(n) * 4)?,
             });
@@ -214,10 +210,10 @@ impl PreSplitter {
         rec.submit();
         let total = read_buffer::<u32>(ctx, self.total(), 1)?[0];
         let s = self.scratch.as_ref().expect("recorded above");
-        let state: Vec<u32> = read_buffer(ctx, &s.budget_state, SCALE_WORD as usize + 1)?;
+        let state: Vec<u32> = read_buffer(ctx, &s.budget_state, SPLIT_SCALE_WORD as usize + 1)?;
         Ok(SplitStages {
             priorities: read_buffer(ctx, &s.priorities, geometry.triangle_count as usize)?,
-            scale: f32::from_bits(state[SCALE_WORD as usize]),
+            scale: f32::from_bits(state[SPLIT_SCALE_WORD as usize]),
             boxes: read_buffer(ctx, &boxes, total as usize)?,
             ref_tris: read_buffer(
                 ctx,
