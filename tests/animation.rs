@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::{gpu, missing_shared_scene};
+use common::{gpu, missing_shared_scene, record_update};
 use treelet::anim::{load_animation, Animation, Explosion, Flag, RigidBodies};
 use treelet::bvh::treelet::TreeletSettings;
 use treelet::bvh::{sah_cost, validate, Builder, SahParams, TreeUpdater, UpdateMode};
@@ -48,10 +48,7 @@ fn animate(animation: &mut dyn Animation, t: f32, geometry: &Geometry) {
 
 /// Updates `tree` to `geometry` with `updater`, in a recording of its own, submitted.
 fn update(updater: &mut TreeUpdater, geometry: &Geometry, tree: &mut Tree) {
-    let mut params = ParamSlab::new(gpu());
-    let mut rec = Recorder::new(gpu(), &mut params, None);
-    updater.record(&mut rec, geometry, &[], tree).unwrap();
-    rec.submit();
+    record_update(updater, geometry, &[], tree).unwrap();
 }
 
 fn gpu_triangles(geometry: &Geometry) -> Vec<Triangle> {

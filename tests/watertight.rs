@@ -8,7 +8,7 @@
 
 mod common;
 
-use common::{assert_hits_equal, cpu_traversal_hits, gpu, oracle_hits, rng};
+use common::{assert_hits_equal, cpu_traversal_hits, gpu, oracle_hits, record_update, rng};
 use glam::{Quat, Vec3};
 use rand::Rng;
 use treelet::bvh::wide::Layout;
@@ -16,7 +16,6 @@ use treelet::bvh::{validate_with_references, Builder, SahParams, TreeUpdater, Up
 use treelet::device::{Geometry, Tree};
 use treelet::geometry::{Hit, Ray};
 use treelet::gpu::Timing;
-use treelet::gpu::{ParamSlab, Recorder};
 use treelet::scene::{Scene, Triangle};
 use treelet::trace::{any_hits, any_hits_wide, closest_hits, closest_hits_wide};
 
@@ -337,12 +336,7 @@ fn no_builder_lets_a_ray_escape() {
         for (mesh, scene, rays, oracle) in &cases {
             let geometry = Geometry::upload(gpu(), scene).unwrap();
             let mut tree = Tree::empty(gpu()).unwrap();
-            let mut slab = ParamSlab::new(gpu());
-            let mut rec = Recorder::new(gpu(), &mut slab, None);
-            updater
-                .record(&mut rec, &geometry, &scene.triangles, &mut tree)
-                .unwrap();
-            rec.submit();
+            record_update(&mut updater, &geometry, &scene.triangles, &mut tree).unwrap();
             let bvh = tree.download(gpu()).unwrap();
             validate_with_references(&bvh, &scene.triangles)
                 .unwrap_or_else(|e| panic!("{who}, {}: invalid tree: {e}", mesh.name));

@@ -6,7 +6,10 @@
 
 mod common;
 
-use common::{assert_hits_match, convert_wide, gpu, oracle_hits, random_soup, scene_of, test_rays};
+use common::{
+    assert_hits_match, convert_wide, gpu, oracle_hits, random_soup, record_update, scene_of,
+    test_rays,
+};
 use treelet::bvh::treelet::TreeletSettings;
 use treelet::bvh::wide::{
     validate_wide, validate_wide_with_references, Layout, Slot, WideBvh, WIDTH,
@@ -17,7 +20,6 @@ use treelet::bvh::{
 };
 use treelet::device::{Geometry, Tree};
 use treelet::geometry::Ray;
-use treelet::gpu::{ParamSlab, Recorder};
 use treelet::scene::{load_scene, Scene};
 use treelet::trace::{any_hits_wide, closest_hits, closest_hits_wide, PathTracer, RenderSettings};
 
@@ -65,12 +67,7 @@ fn build_wide(scene: &Scene, builder: Builder, level_dispatches: Option<u32>) ->
         .converter_mut()
         .unwrap()
         .set_level_dispatches(level_dispatches);
-    let mut slab = ParamSlab::new(gpu());
-    let mut rec = Recorder::new(gpu(), &mut slab, None);
-    updater
-        .record(&mut rec, &geometry, &scene.triangles, &mut tree)
-        .unwrap();
-    rec.submit();
+    record_update(&mut updater, &geometry, &scene.triangles, &mut tree).unwrap();
     (geometry, tree)
 }
 
@@ -294,10 +291,7 @@ fn leaves_too_large_for_the_layout_are_refused() {
     let mut tree = Tree::empty(gpu()).unwrap();
     let mut updater = TreeUpdater::new(gpu(), UpdateMode::Rebuild(Builder::Sweep), &sah).unwrap();
     updater.set_layout(gpu(), Layout::Wide);
-    let mut slab = ParamSlab::new(gpu());
-    let mut rec = Recorder::new(gpu(), &mut slab, None);
-    let e = updater
-        .record(&mut rec, &geometry, &scene.triangles, &mut tree)
+    let e = record_update(&mut updater, &geometry, &scene.triangles, &mut tree)
         .unwrap_err()
         .to_string();
     assert!(e.contains("do not fit the wide layout"), "{e}");

@@ -1,20 +1,11 @@
-// BVH traversal with a per-invocation stack (children tested together, nearer first): closest hit
-// (`trace_closest`), or any hit (`trace_any`, for shadow rays: stops at the first leaf hit), with
-// the watertight triangle test. The including kernel declares the storage arrays `nodes`,
+// BVH traversal with a per-invocation stack (children tested together, nearer first): `traverse`
+// finds the closest hit, or any hit (for shadow rays: stops at the first leaf hit), with the
+// watertight triangle test. The including kernel declares the storage arrays `nodes`,
 // `prim_indices` and `triangles`, and passes a zero from a uniform (`opaque_zero`, see
 // ray_triangle.wgsl). CPU twin: `Bvh::closest_hit` / `Bvh::any_hit` (src/bvh/traverse.rs).
 #include "bvh_node.wgsl"
 #include "ray_triangle.wgsl"
 #include "ray_box.wgsl"
-
-fn trace_closest(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_zero: u32) -> TraceResult {
-    return traverse(origin, dir, t_min, t_max, opaque_zero, false);
-}
-
-// Some hit in [t_min, t_max] (not necessarily the closest), or MISS.
-fn trace_any(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_zero: u32) -> TraceResult {
-    return traverse(origin, dir, t_min, t_max, opaque_zero, true);
-}
 
 fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_zero: u32, any_hit: bool) -> TraceResult {
     var best = Hit(t_max, MISS, 0.0, 0.0);

@@ -1,6 +1,6 @@
 // The diffuse path integrator of the path-tracing kernels (paths_trace.wgsl: binary BVH,
 // paths_trace_wide.wgsl: wide BVH), which declare the bindings and include their traversal
-// (`trace_closest`, `trace_any`) before this file.
+// (`traverse`) before this file.
 // Diffuse path tracing: one invocation per pixel, `samples` paths per pixel per dispatch, each
 // with up to `max_depth` closest-hit rays (cosine-weighted bounces; emissive surfaces, a sky and
 // point lights as light). At every path vertex each point light is sampled with a shadow ray
@@ -9,6 +9,15 @@
 // accumulate progressively in `accum` (rgb sum, sample count in w). Every traced ray, bounce and
 // shadow, is counted (workgroup reduction, then one global atomic per workgroup).
 #include "random.wgsl"
+
+fn trace_closest(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_zero: u32) -> TraceResult {
+    return traverse(origin, dir, t_min, t_max, opaque_zero, false);
+}
+
+// Some hit in [t_min, t_max] (not necessarily the closest), or MISS.
+fn trace_any(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_zero: u32) -> TraceResult {
+    return traverse(origin, dir, t_min, t_max, opaque_zero, true);
+}
 
 struct TraceParams {
     eye: vec3<f32>,

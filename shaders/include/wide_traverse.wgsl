@@ -1,7 +1,7 @@
-// Traversal of the compressed 8-wide BVH (Ylitie, Karras & Laine 2017, §4): closest hit
-// (`trace_closest`) or any hit (`trace_any`) with the watertight triangle test. A node's eight
-// quantized child boxes are tested four at a time, with the near and far planes chosen once per
-// node from the ray's direction. The leaves it hits are intersected at once, near-first, each
+// Traversal of the compressed 8-wide BVH (Ylitie, Karras & Laine 2017, §4): `traverse` finds the
+// closest hit or any hit with the watertight triangle test. A node's eight quantized child boxes
+// are tested four at a time, with the near and far planes chosen once per node from the ray's
+// direction. The leaves it hits are intersected at once, near-first, each
 // skipped when a hit closer than its box was found. The internal children it hits become a node
 // group (child base, hit bits | imask << 8, nearest entry distance) visited in ray-octant order:
 // a child's hit bit sits at `slot ^ octant_flip`, so taking the highest bit first gives
@@ -36,15 +36,6 @@ fn nearest_entry(entry: array<vec4<f32>, 2>, mask: u32) -> f32 {
     let high = select(vec4<f32>(3.0e38), entry[1], (vec4<u32>(mask >> 4u) & bits) != vec4<u32>(0u));
     let both = min(low, high);
     return min(min(both.x, both.y), min(both.z, both.w));
-}
-
-fn trace_closest(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_zero: u32) -> TraceResult {
-    return traverse(origin, dir, t_min, t_max, opaque_zero, false);
-}
-
-// Some hit in [t_min, t_max] (not necessarily the closest), or MISS.
-fn trace_any(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_zero: u32) -> TraceResult {
-    return traverse(origin, dir, t_min, t_max, opaque_zero, true);
 }
 
 fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_zero: u32, any_hit: bool) -> TraceResult {

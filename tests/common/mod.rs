@@ -280,6 +280,21 @@ pub fn assert_clean_failure(args: &[&str], expected: &str) {
     );
 }
 
+/// Records one update of `tree` by `updater` over `geometry` and submits it, as a frame does
+/// (nothing is submitted when recording fails).
+pub fn record_update(
+    updater: &mut treelet::bvh::TreeUpdater,
+    geometry: &treelet::device::Geometry,
+    triangles: &[Triangle],
+    tree: &mut treelet::device::Tree,
+) -> treelet::Result<()> {
+    let mut slab = treelet::gpu::ParamSlab::new(gpu());
+    let mut rec = treelet::gpu::Recorder::new(gpu(), &mut slab, None);
+    updater.record(&mut rec, geometry, triangles, tree)?;
+    rec.submit();
+    Ok(())
+}
+
 /// Converts `tree` into the wide layout on the GPU (`tree.wide`), as an update does.
 pub fn convert_wide(tree: &mut treelet::device::Tree) {
     let mut slab = treelet::gpu::ParamSlab::new(gpu());
