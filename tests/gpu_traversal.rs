@@ -8,8 +8,10 @@ use common::{
     assert_cpu_traversal_matches, assert_hits_match, gpu, missing_shared_scene, random_soup,
     scene_of, test_rays,
 };
+use glam::Vec3;
 use treelet::bvh::{build_sweep_sah, validate, SahParams};
 use treelet::device::{Geometry, Tree};
+use treelet::geometry::Ray;
 use treelet::scene::{load_scene, Scene};
 use treelet::trace::closest_hits;
 
@@ -56,4 +58,27 @@ fn shared_buddha_hits_equal_brute_force() {
 #[test]
 fn single_triangle_scene() {
     check_scene(&scene_of(random_soup(1, 9)), 100, 5);
+}
+
+#[test]
+fn rays_with_bad_intervals_are_rejected() {
+    let scene = scene_of(random_soup(50, 4));
+    let bvh = build_sweep_sah(&scene.triangles, &SahParams::default());
+    let geometry = Geometry::upload(gpu(), &scene).unwrap();
+    let tree = Tree::upload(gpu(), &bvh).unwrap();
+    let good = Ray::new(Vec3::ZERO, Vec3::X, 0.0, f32::MAX);
+    for (t_min, t_max) in [(-1.0, 1.0), (2.0, 1.0), (f32::NAN, 1.0), (0.0, f32::NAN)] {
+        let rays = [good, Ray::new(Vec3::ZERO, Vec3::X, t_min, t_max)];
+        let err = closest_hits(gpu(), &geometry, &tree, &rays).unwrap_err();
+        assert!(
+            err.to_string().contains("ray 1 has the interval"),
+            "[{t_min}, {t_max}]: {err}"
+        );
+    }
+    assert_eq!(
+        closest_hits(gpu(), &geometry, &tree, &[good])
+            .unwrap()
+            .len(),
+        1
+    );
 }

@@ -1,14 +1,16 @@
 // Traversal of the compressed 8-wide BVH (Ylitie, Karras & Laine 2017, §4): `traverse` finds the
 // closest hit or any hit with the watertight triangle test. A node's eight quantized child boxes
 // are tested four at a time, with the near and far planes chosen once per node from the ray's
-// direction. The leaves it hits are intersected at once, near-first, each
-// skipped when a hit closer than its box was found. The internal children it hits become a node
-// group (child base, hit bits | imask << 8, nearest entry distance) visited in ray-octant order:
-// a child's hit bit sits at `slot ^ octant_flip`, so taking the highest bit first gives
-// front-to-back order for children placed by the conversion's octant assignment. A group with
-// children left is pushed while one child is visited (one stack entry per wide level at most) and
-// dropped when popped if its nearest child lies beyond the closest hit. The including kernel
-// declares `wide_nodes`, `prim_indices` and `triangles`, and passes a zero from a uniform
+// direction. The leaves it hits are intersected at once, near-first (in ray-octant order: a
+// slot's bit sits at `slot ^ octant_flip`, and the conversion placed children by octant), each
+// skipped when a hit closer than its box was found. The internal children it hits are sorted by
+// entry distance (a sorting network over keys of entry bits and child offset) and become a node
+// group: child base, the offsets of the children in order (three bits each) with their count, and
+// the entry distance of the second child. The traversal descends into the nearest child and
+// pushes the group if children remain (one stack entry per wide level at most); a popped group
+// whose next child lies beyond the closest hit is dropped. The paper visits the internal children
+// in octant order too; sorted, rays test far fewer triangles (README, "Traversal"). The including
+// kernel declares `wide_nodes`, `prim_indices` and `triangles`, and passes a zero from a uniform
 // (`opaque_zero`). CPU twin of the layout: `WideBvh` (src/bvh/wide/node.rs).
 #include "wide_node.wgsl"
 #include "ray_triangle.wgsl"
@@ -29,13 +31,48 @@ fn slots_in_octant_order(mask: u32, flip: u32) -> u32 {
     return m;
 }
 
-// The smallest entry distance among the slots of `mask`.
-fn nearest_entry(entry: array<vec4<f32>, 2>, mask: u32) -> f32 {
-    let bits = vec4<u32>(1u, 2u, 4u, 8u);
-    let low = select(vec4<f32>(3.0e38), entry[0], (vec4<u32>(mask) & bits) != vec4<u32>(0u));
-    let high = select(vec4<f32>(3.0e38), entry[1], (vec4<u32>(mask >> 4u) & bits) != vec4<u32>(0u));
-    let both = min(low, high);
-    return min(min(both.x, both.y), min(both.z, both.w));
+// Eight keys in ascending order (Batcher's odd-even merge sort, 19 comparators): keys 0-3 in
+// `low`, 4-7 in `high`, and the same for the result.
+fn sort_keys(low: vec4<u32>, high: vec4<u32>) -> array<vec4<u32>, 2> {
+    var l = low;
+    var h = high;
+    // (0,1) (2,3) (4,5) (6,7)
+    var a4 = vec4<u32>(l.x, l.z, h.x, h.z);
+    var b4 = vec4<u32>(l.y, l.w, h.y, h.w);
+    var lo4 = min(a4, b4);
+    var hi4 = max(a4, b4);
+    l = vec4<u32>(lo4.x, hi4.x, lo4.y, hi4.y);
+    h = vec4<u32>(lo4.z, hi4.z, lo4.w, hi4.w);
+    // (0,2) (1,3) (4,6) (5,7)
+    a4 = vec4<u32>(l.xy, h.xy);
+    b4 = vec4<u32>(l.zw, h.zw);
+    lo4 = min(a4, b4);
+    hi4 = max(a4, b4);
+    l = vec4<u32>(lo4.xy, hi4.xy);
+    h = vec4<u32>(lo4.zw, hi4.zw);
+    // (1,2) (5,6)
+    let a2 = vec2<u32>(l.y, h.y);
+    let b2 = vec2<u32>(l.z, h.z);
+    var lo2 = min(a2, b2);
+    var hi2 = max(a2, b2);
+    l = vec4<u32>(l.x, lo2.x, hi2.x, l.w);
+    h = vec4<u32>(h.x, lo2.y, hi2.y, h.w);
+    // (0,4) (1,5) (2,6) (3,7)
+    lo4 = min(l, h);
+    hi4 = max(l, h);
+    l = lo4;
+    h = hi4;
+    // (2,4) (3,5)
+    lo2 = min(l.zw, h.xy);
+    hi2 = max(l.zw, h.xy);
+    l = vec4<u32>(l.xy, lo2);
+    h = vec4<u32>(hi2, h.zw);
+    // (1,2) (3,4) (5,6)
+    let a3 = vec3<u32>(l.y, l.w, h.y);
+    let b3 = vec3<u32>(l.z, h.x, h.z);
+    let lo3 = min(a3, b3);
+    let hi3 = max(a3, b3);
+    return array<vec4<u32>, 2>(vec4<u32>(l.x, lo3.x, hi3.x, lo3.y), vec4<u32>(hi3.y, lo3.z, hi3.z, h.w));
 }
 
 fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_zero: u32, any_hit: bool) -> TraceResult {
@@ -94,7 +131,6 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_ze
         entered &= occupied;
         // Leaves near-first (octant order), each skipped once a hit nearer than its box is found.
         var leaves = slots_in_octant_order(entered & ~imask, octant_flip);
-        let hits = slots_in_octant_order(entered & imask, octant_flip);
         while leaves != 0u {
             let position = firstLeadingBit(leaves);
             leaves ^= 1u << position;
@@ -115,11 +151,25 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_ze
                 return TraceResult(best, overflow);
             }
         }
-        // The node group to continue with: this node's hit children (with the nearest entry among
-        // them, to cull the group once a closer hit is found), or the last pushed group that
-        // may still hold a closer hit.
-        var group = vec3<u32>(node.child_base, hits | (imask << 8u), bitcast<u32>(nearest_entry(entry, entered & imask)));
-        if hits == 0u {
+        // The internal children hit, nearest first: keys of a child's entry distance (>= t_min >=
+        // 0, and non-negative floats order as their bits) with its offset from child_base in the
+        // low three bits, sorted. A group: (child base, offsets in order, three bits each, | count << 24, entry of
+        // the second child).
+        let hit_inner = entered & imask;
+        let inner_low = (vec4<u32>(hit_inner) & vec4<u32>(1u, 2u, 4u, 8u)) != vec4<u32>(0u);
+        let inner_high = (vec4<u32>(hit_inner >> 4u) & vec4<u32>(1u, 2u, 4u, 8u)) != vec4<u32>(0u);
+        let offsets_low = countOneBits(vec4<u32>(imask) & vec4<u32>(0u, 1u, 3u, 7u));
+        let offsets_high = countOneBits(vec4<u32>(imask) & vec4<u32>(15u, 31u, 63u, 127u));
+        let keys = sort_keys(
+            select(vec4<u32>(0xffffffffu), (bitcast<vec4<u32>>(entry[0]) & vec4<u32>(~7u)) | offsets_low, inner_low),
+            select(vec4<u32>(0xffffffffu), (bitcast<vec4<u32>>(entry[1]) & vec4<u32>(~7u)) | offsets_high, inner_high),
+        );
+        let count = countOneBits(hit_inner);
+        let order = (keys[0].x & 7u) | ((keys[0].y & 7u) << 3u) | ((keys[0].z & 7u) << 6u) | ((keys[0].w & 7u) << 9u)
+            | ((keys[1].x & 7u) << 12u) | ((keys[1].y & 7u) << 15u) | ((keys[1].z & 7u) << 18u) | ((keys[1].w & 7u) << 21u);
+        // The second child's key without its low bits: its entry distance, rounded down.
+        var group = vec3<u32>(node.child_base, order | (count << 24u), keys[0].y & ~7u);
+        if count == 0u {
             var found = false;
             while sp > 0u {
                 sp--;
@@ -133,13 +183,11 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_ze
                 break;
             }
         }
-        let position = firstLeadingBit(group.y & 0xffu);
-        group.y ^= 1u << position;
-        let slot = position ^ octant_flip;
-        index = group.x + countOneBits((group.y >> 8u) & ((1u << slot) - 1u));
-        if (group.y & 0xffu) != 0u {
+        index = group.x + (group.y & 7u);
+        let left = (group.y >> 24u) - 1u;
+        if left != 0u {
             if sp < STACK_SIZE {
-                stack[sp] = group;
+                stack[sp] = vec3<u32>(group.x, ((group.y & 0xffffffu) >> 3u) | (left << 24u), group.z);
                 sp++;
             } else {
                 overflow = 1u;

@@ -4,7 +4,9 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-/// A ray as the GPU query kernel reads it (32 bytes).
+/// A ray as the GPU query kernel reads it (32 bytes). Hits are searched in [t_min, t_max], with
+/// 0 <= t_min <= t_max (as in DXR and OptiX): the traversals order and cull boxes by entry
+/// distances they take to be non-negative; the ray queries reject other intervals.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 pub struct Ray {
@@ -51,5 +53,10 @@ impl Ray {
             dir: dir.to_array(),
             t_max,
         }
+    }
+
+    /// Whether 0 <= t_min <= t_max (false for NaN bounds).
+    pub fn has_valid_interval(&self) -> bool {
+        self.t_min >= 0.0 && self.t_min <= self.t_max
     }
 }

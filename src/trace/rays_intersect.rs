@@ -83,6 +83,16 @@ fn query(
     }
     let ray_count = u32::try_from(rays.len())
         .map_err(|_| Error::InvalidArgument(format!("{} rays in one batch", rays.len())))?;
+    if let Some((i, ray)) = rays
+        .iter()
+        .enumerate()
+        .find(|(_, r)| !r.has_valid_interval())
+    {
+        return Err(Error::InvalidArgument(format!(
+            "ray {i} has the interval [{}, {}]: a ray's t_min must be >= 0 and <= t_max",
+            ray.t_min, ray.t_max
+        )));
+    }
     let (kernel, nodes, prim_indices) = match layout {
         Layout::Binary => (
             Kernel::new(ctx, &RAYS_INTERSECT),
