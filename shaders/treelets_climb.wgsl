@@ -9,7 +9,7 @@
 #include "bvh_node.wgsl"
 #include "treelet_round.wgsl"
 
-const WORKGROUP: u32 = 32u;
+const WORKGROUP: u32 = 128u;
 
 @group(0) @binding(0) var<uniform> params: RoundParams;
 @group(0) @binding(1) var<storage, read_write> nodes: array<BvhNode>;

@@ -74,7 +74,7 @@ pub(crate) struct Round {
 }
 
 /// Levels a round of `n` leaves and smallest root `gamma` gives a dispatch each: about as many as
-/// have more roots than the climbing workgroup has invocations (level L of a balanced tree has
+/// have more roots than the climbing workgroup has invocations, 128 (level L of a balanced tree has
 /// about n / (γ·2^L) roots), plus two for unbalanced trees.
 pub(crate) fn level_dispatches(n: u32, gamma: u32) -> u32 {
     let workgroup = TREELETS_CLIMB.info.workgroup_size[0];
