@@ -3,17 +3,21 @@
 // Hillis-Steele scan of the 256 invocation totals in workgroup memory) and writes the block's total
 // to sums[block]. The caller scans `sums` the same way (the next level, its own dispatch) and adds
 // it back with counts_add.wgsl; a length of at most SCAN_BLOCK needs this one dispatch only.
-// Blocks are linear workgroup indices over a 1D or 2D grid: wid.x + wid.y * num_workgroups.x.
+// `columns` arrays of `len` elements stored back to back are scanned independently: workgroup
+// c * num_blocks + b scans block b of column c and writes its total to sums[c * num_blocks + b]
+// (the next level's column c). Workgroups are linear indices over a 1D or 2D grid:
+// wid.x + wid.y * num_workgroups.x.
 #include "constants.wgsl"
 
 const WORKGROUP: u32 = 256u;
 const ITEMS: u32 = SCAN_BLOCK / WORKGROUP;
 
 struct ScanParams {
+    // Elements and blocks per column.
     len: u32,
     num_blocks: u32,
-    pad0: u32,
-    pad1: u32,
+    columns: u32,
+    pad: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: ScanParams;
@@ -22,16 +26,17 @@ struct ScanParams {
 
 var<workgroup> partial: array<u32, 256>;
 
-fn load(i: u32) -> u32 {
+// Element i of the column starting at `start`.
+fn load(start: u32, i: u32) -> u32 {
     if i < params.len {
-        return data[i];
+        return data[start + i];
     }
     return 0u;
 }
 
-fn store(i: u32, x: u32) {
+fn store(start: u32, i: u32, x: u32) {
     if i < params.len {
-        data[i] = x;
+        data[start + i] = x;
     }
 }
 
@@ -41,14 +46,17 @@ fn main(
     @builtin(workgroup_id) wid: vec3<u32>,
     @builtin(num_workgroups) nwg: vec3<u32>,
 ) {
-    let block = wid.x + wid.y * nwg.x;
-    if block >= params.num_blocks {
+    let id = wid.x + wid.y * nwg.x;
+    if id >= params.num_blocks * params.columns {
         return;
     }
+    let column = id / params.num_blocks;
+    let block = id - column * params.num_blocks;
+    let start = column * params.len;
     let base = block * SCAN_BLOCK + lid * ITEMS;
     var total = 0u;
     for (var i = 0u; i < ITEMS; i++) {
-        total += load(base + i);
+        total += load(start, base + i);
     }
     partial[lid] = total;
     workgroupBarrier();
@@ -63,11 +71,11 @@ fn main(
     }
     var before = partial[lid] - total;
     for (var i = 0u; i < ITEMS; i++) {
-        let x = load(base + i);
-        store(base + i, before);
+        let x = load(start, base + i);
+        store(start, base + i, before);
         before += x;
     }
     if lid == WORKGROUP - 1u {
-        sums[block] = partial[lid];
+        sums[id] = partial[lid];
     }
 }

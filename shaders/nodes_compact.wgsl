@@ -18,20 +18,33 @@ struct CompactParams {
 @group(0) @binding(1) var<storage, read> nodes: array<BvhNode>;
 @group(0) @binding(2) var<storage, read> prim_indices: array<u32>;
 @group(0) @binding(3) var<storage, read> flags: array<u32>;
-@group(0) @binding(4) var<storage, read> kept_scan: array<u32>;
-@group(0) @binding(5) var<storage, read> leaf_prim_scan: array<u32>;
+// Two columns of 2·leaf_count - 1, each scanned block by block (sort::PrefixScan's block-local
+// scan): new node indices, then the first primitive of each output leaf; see `scanned`.
+@group(0) @binding(4) var<storage, read> scans: array<u32>;
+// The scanned block totals: column c's block b at c·blocks + b.
+@group(0) @binding(5) var<storage, read> block_offsets: array<u32>;
 @group(0) @binding(6) var<storage, read_write> out_nodes: array<BvhNode>;
 @group(0) @binding(7) var<storage, read_write> out_prims: array<u32>;
 // [0]: output nodes, [1]: output primitive references
 @group(0) @binding(8) var<storage, read_write> tree_counts: array<u32>;
 @group(0) @binding(9) var<storage, read> ref_tris: array<u32>;
-// Total of the leaf primitive scan.
-@group(0) @binding(10) var<storage, read> leaf_prim_total: array<u32>;
+// Totals of the two scans.
+@group(0) @binding(10) var<storage, read> totals: array<u32>;
 // The item count's limit (`gpu::ItemCount`): the tree has min(params.leaf_count, count_limit[0])
 // leaves.
 @group(0) @binding(11) var<storage, read> count_limit: array<u32>;
 
 #include "leaf_gather.wgsl"
+
+const KEPT: u32 = 0u;
+const LEAF_PRIMS: u32 = 1u;
+
+// Element i of the exclusive scan of `column`: its block-local value plus its block's offset.
+fn scanned(column: u32, i: u32) -> u32 {
+    let len = 2u * params.leaf_count - 1u;
+    let blocks = (len + SCAN_BLOCK - 1u) / SCAN_BLOCK;
+    return scans[column * len + i] + block_offsets[column * blocks + i / SCAN_BLOCK];
+}
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -39,22 +52,22 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let node_count = 2u * min(params.leaf_count, count_limit[0]) - 1u;
     if i == 0u {
         let last = node_count - 1u;
-        tree_counts[0] = kept_scan[last] + (flags[last] & 1u);
-        tree_counts[1] = leaf_prim_total[0];
+        tree_counts[0] = totals[KEPT];
+        tree_counts[1] = totals[LEAF_PRIMS];
     }
     if i >= node_count || (flags[i] & 1u) == 0u {
         return;
     }
     let node = nodes[i];
-    let out = kept_scan[i];
+    let out = scanned(KEPT, i);
     if (flags[i] & 2u) != 0u {
-        let first = leaf_prim_scan[i];
+        let first = scanned(LEAF_PRIMS, i);
         let count = gather_leaf(i);
         for (var k = 0u; k < count; k++) {
             out_prims[first + k] = gathered[k];
         }
         out_nodes[out] = BvhNode(node.min, first, node.max, LEAF_FLAG | count);
     } else {
-        out_nodes[out] = BvhNode(node.min, kept_scan[node.left_or_first], node.max, kept_scan[node.right_or_count]);
+        out_nodes[out] = BvhNode(node.min, scanned(KEPT, node.left_or_first), node.max, scanned(KEPT, node.right_or_count));
     }
 }

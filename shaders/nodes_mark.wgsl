@@ -31,14 +31,15 @@ struct CollapseParams {
 @group(0) @binding(3) var<storage, read> prim_counts: array<u32>;
 @group(0) @binding(4) var<storage, read> costs: array<f32>;
 @group(0) @binding(5) var<storage, read_write> flags: array<u32>;
-@group(0) @binding(6) var<storage, read_write> kept_scan: array<u32>;
-@group(0) @binding(7) var<storage, read_write> leaf_prim_scan: array<u32>;
-@group(0) @binding(8) var<storage, read> prim_indices: array<u32>;
-@group(0) @binding(9) var<storage, read> ref_tris: array<u32>;
+// The compaction scans' inputs, two columns of 2·leaf_count - 1: kept (1 or 0), then the output
+// leaf's primitive count (0 for other nodes).
+@group(0) @binding(6) var<storage, read_write> scans: array<u32>;
+@group(0) @binding(7) var<storage, read> prim_indices: array<u32>;
+@group(0) @binding(8) var<storage, read> ref_tris: array<u32>;
 // The item count's limit (`gpu::ItemCount`): the tree has min(params.leaf_count, count_limit[0])
 // leaves. The dispatch covers 2·params.leaf_count - 1 nodes; the nodes past the tree's get zeros,
 // so that the scans over all of them give the tree's totals.
-@group(0) @binding(10) var<storage, read> count_limit: array<u32>;
+@group(0) @binding(9) var<storage, read> count_limit: array<u32>;
 
 #include "leaf_gather.wgsl"
 
@@ -60,13 +61,14 @@ fn collapses(node: u32) -> bool {
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x + gid.y * params.row_pitch;
-    if i >= 2u * params.leaf_count - 1u {
+    let column = 2u * params.leaf_count - 1u;
+    if i >= column {
         return;
     }
     if i >= 2u * min(params.leaf_count, count_limit[0]) - 1u {
         flags[i] = 0u;
-        kept_scan[i] = 0u;
-        leaf_prim_scan[i] = 0u;
+        scans[i] = 0u;
+        scans[column + i] = 0u;
         return;
     }
     var kept = true;
@@ -83,10 +85,10 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let leaf = kept && collapses(i);
     flags[i] = select(0u, 1u, kept) | select(0u, 2u, leaf);
-    kept_scan[i] = select(0u, 1u, kept);
+    scans[i] = select(0u, 1u, kept);
     var prims = 0u;
     if leaf {
         prims = select(prim_counts[i], gather_leaf(i), params.has_refs != 0u);
     }
-    leaf_prim_scan[i] = prims;
+    scans[column + i] = prims;
 }

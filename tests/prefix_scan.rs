@@ -1,6 +1,7 @@
-//! The GPU exclusive prefix scan (`sort::PrefixScan`, used by the radix sort, the collapse and
-//! pre-splitting) against the CPU's exclusive scan: lengths around the block size, two and three
-//! levels with their add-backs, 2D grids, and the grand total.
+//! The GPU exclusive prefix scan (`sort::PrefixScan`, used by the collapse and pre-splitting)
+//! against the CPU's exclusive scan: lengths around the block size, two and three levels with
+//! their add-backs, 2D grids, the grand total, and the block-local scan of several columns (each
+//! element plus its block's offset, the column totals).
 
 mod common;
 
@@ -8,13 +9,13 @@ use common::{gpu, rng};
 use rand::Rng;
 use treelet::gpu::constants::SCAN_BLOCK;
 use treelet::gpu::{read_buffer, storage_buffer, ParamSlab, Recorder};
-use treelet::sort::PrefixScan;
+use treelet::sort::{scan_blocks, PrefixScan};
 
 /// Scans `data` on the GPU; the scanned data and the total.
 fn gpu_scan(scan: &mut PrefixScan, data: &[u32]) -> (Vec<u32>, u32) {
     let ctx = gpu();
     let buffer = storage_buffer(ctx, "scan data", data).expect("upload");
-    scan.reserve(ctx, data.len() as u32).expect("reserve");
+    scan.reserve(ctx, data.len() as u32, 1).expect("reserve");
     let mut params = ParamSlab::new(ctx);
     let mut rec = Recorder::new(ctx, &mut params, None);
     {
@@ -69,4 +70,70 @@ fn two_dimensional_grids() {
     let mut scan = PrefixScan::new(gpu());
     scan.set_max_workgroups_per_dimension(2);
     check(&mut scan, 5 * SCAN_BLOCK as usize - 9, 120);
+}
+
+/// Scans `columns` columns of `len` random values block-locally on the GPU and checks every
+/// element (block-local value + block offset) and every column total against the CPU.
+fn check_block_local(scan: &mut PrefixScan, len: usize, columns: usize, seed: u64) {
+    let ctx = gpu();
+    let mut r = rng(seed);
+    let data: Vec<u32> = (0..len * columns).map(|_| r.random_range(0..16)).collect();
+    let buffer = storage_buffer(ctx, "scan columns", &data).expect("upload");
+    scan.reserve(ctx, len as u32, columns as u32)
+        .expect("reserve");
+    let mut params = ParamSlab::new(ctx);
+    let mut rec = Recorder::new(ctx, &mut params, None);
+    {
+        let mut pass = rec.pass("scan");
+        scan.record_block_local(&mut pass, &buffer, len as u32, columns as u32)
+            .expect("record");
+    }
+    rec.submit();
+    let blocks = scan_blocks(len as u32) as usize;
+    let local: Vec<u32> = read_buffer(ctx, &buffer, len * columns).expect("read data");
+    let offsets: Vec<u32> =
+        read_buffer(ctx, scan.block_offsets(), blocks * columns).expect("read offsets");
+    let totals: Vec<u32> = read_buffer(ctx, scan.total(), columns).expect("read totals");
+    for c in 0..columns {
+        let mut sum = 0u32;
+        for i in 0..len {
+            let got = local[c * len + i] + offsets[c * blocks + i / SCAN_BLOCK as usize];
+            assert_eq!(got, sum, "column {c}, element {i} of {len}");
+            sum += data[c * len + i];
+        }
+        assert_eq!(totals[c], sum, "total of column {c} ({len} elements)");
+    }
+}
+
+#[test]
+fn block_local_columns() {
+    let mut scan = PrefixScan::new(gpu());
+    let b = SCAN_BLOCK as usize;
+    // One block (the block totals still get a level of their own: offsets of 0), several
+    // blocks, two levels of blocks; one, two and three columns.
+    for (i, (len, columns)) in [
+        (1, 2),
+        (b - 1, 2),
+        (b, 1),
+        (b + 1, 2),
+        (3 * b + 17, 3),
+        (5 * b * 7 + 3, 2),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        check_block_local(&mut scan, len, columns, 130 + i as u64);
+    }
+}
+
+#[test]
+fn block_local_three_levels_and_2d_grids() {
+    // Three levels (b² + 1 elements): the block totals are scanned with their own add-back.
+    let mut scan = PrefixScan::new(gpu());
+    let b = SCAN_BLOCK as usize;
+    check_block_local(&mut scan, b * b + 1, 1, 140);
+    // Two columns of 5 blocks on a grid capped at 3 workgroups per dimension (10 blocks: 3 x 4).
+    let mut scan = PrefixScan::new(gpu());
+    scan.set_max_workgroups_per_dimension(3);
+    check_block_local(&mut scan, 5 * b - 9, 2, 141);
 }

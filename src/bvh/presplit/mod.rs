@@ -130,7 +130,7 @@ impl PreSplitter {
                 u64::from(capacity) * 4,
             )?);
         }
-        self.scan.reserve(ctx, n)?;
+        self.scan.reserve(ctx, n, 1)?;
         let s = self.scratch.as_ref().expect("allocated");
         let ref_tris = self.ref_tris.as_ref().expect("allocated");
         let levels = CentroidsReduce::level_count(n);

@@ -1,7 +1,8 @@
 //! GPU leaf collapse and compaction into the traversal layout (Karras & Aila 2013, §3): mark kept
 //! nodes and output leaves (kernel `nodes_mark`), exclusive scans for new node indices and leaf
-//! primitive ranges (`sort::PrefixScan`), then write the output tree (kernel `nodes_compact`).
-//! CPU twin: `WorkingTree::collapse`.
+//! primitive ranges (`sort::PrefixScan`, both columns in the same dispatches, block-local: the
+//! compaction adds each block's offset where it reads), then write the output tree (kernel
+//! `nodes_compact`). Four dispatches up to 8.4M leaves. CPU twin: `WorkingTree::collapse`.
 
 use super::dp::CostModel;
 use super::nodes_compact::{CompactParams, NODES_COMPACT};
@@ -14,8 +15,9 @@ use crate::Result;
 /// Buffers of one collapse: scratch (flags, scans) and the output tree.
 pub(crate) struct CollapseBuffers<'a> {
     pub flags: &'a wgpu::Buffer,
-    pub kept_scan: &'a wgpu::Buffer,
-    pub leaf_prim_scan: &'a wgpu::Buffer,
+    /// Two columns of 2n - 1 words: kept flags, then output leaves' primitive counts (scanned in
+    /// place, block-local).
+    pub scans: &'a wgpu::Buffer,
     pub out_nodes: &'a wgpu::Buffer,
     pub out_prims: &'a wgpu::Buffer,
     pub tree_counts: &'a wgpu::Buffer,
@@ -43,7 +45,7 @@ impl Collapse {
 
     /// Grows the scan's level buffers for a working tree of `n` leaves.
     pub fn reserve(&mut self, ctx: &GpuContext, n: u32) -> Result<()> {
-        self.scan.reserve(ctx, 2 * n - 1)
+        self.scan.reserve(ctx, 2 * n - 1, 2)
     }
 
     /// Records the collapse of a working tree of `n` leaves (nodes and primitive order in
@@ -82,15 +84,14 @@ impl Collapse {
                 state.prim_counts,
                 state.costs,
                 out.flags,
-                out.kept_scan,
-                out.leaf_prim_scan,
+                out.scans,
                 prims,
                 ref_tris,
                 count.limit(ctx),
             ],
         );
-        self.scan.record(pass, out.kept_scan, node_count)?;
-        self.scan.record(pass, out.leaf_prim_scan, node_count)?;
+        self.scan
+            .record_block_local(pass, out.scans, node_count, 2)?;
         let compact = CompactParams {
             leaf_count: n,
             row_pitch: grid.row_pitch,
@@ -105,8 +106,8 @@ impl Collapse {
                 state.nodes,
                 prims,
                 out.flags,
-                out.kept_scan,
-                out.leaf_prim_scan,
+                out.scans,
+                self.scan.block_offsets(),
                 out.out_nodes,
                 out.out_prims,
                 out.tree_counts,

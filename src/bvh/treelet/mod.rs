@@ -204,8 +204,7 @@ struct Scratch {
     roots: wgpu::Buffer,
     waves: wgpu::Buffer,
     flags: wgpu::Buffer,
-    kept_scan: wgpu::Buffer,
-    leaf_prim_scan: wgpu::Buffer,
+    scans: wgpu::Buffer,
 }
 
 impl Scratch {
@@ -227,8 +226,7 @@ impl Scratch {
             roots: storage_buffer_zeroed(ctx, "treelet roots", u64::from(capacity) * 4)?,
             waves: storage_buffer_zeroed(ctx, "treelet waves", u64::from(capacity) * 4)?,
             flags: storage_buffer_zeroed(ctx, "collapse flags", nodes * 4)?,
-            kept_scan: storage_buffer_zeroed(ctx, "collapse kept scan", nodes * 4)?,
-            leaf_prim_scan: storage_buffer_zeroed(ctx, "collapse leaf scan", nodes * 4)?,
+            scans: storage_buffer_zeroed(ctx, "collapse scans", 2 * nodes * 4)?,
         })
     }
 }
@@ -449,8 +447,7 @@ impl TrbvhBuilder {
         let mut pass = rec.pass("collapse");
         let out = CollapseBuffers {
             flags: &scratch.flags,
-            kept_scan: &scratch.kept_scan,
-            leaf_prim_scan: &scratch.leaf_prim_scan,
+            scans: &scratch.scans,
             out_nodes: &tree.nodes,
             out_prims: &tree.prim_indices,
             tree_counts: &tree.counts,
