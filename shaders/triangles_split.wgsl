@@ -17,14 +17,22 @@
 
 @group(0) @binding(0) var<uniform> params: Items;
 @group(0) @binding(1) var<storage, read> triangles: array<Triangle>;
+// The exclusive scan of the reference counts, block by block (sort::PrefixScan's block-local
+// scan), and the scanned block totals: see `first_reference`.
 @group(0) @binding(2) var<storage, read> ref_offsets: array<u32>;
+@group(0) @binding(3) var<storage, read> block_offsets: array<u32>;
 // [0]: total references
-@group(0) @binding(3) var<storage, read> ref_total: array<u32>;
-@group(0) @binding(4) var<storage, read_write> prim_boxes: array<Aabb>;
-@group(0) @binding(5) var<storage, read_write> ref_tris: array<u32>;
+@group(0) @binding(4) var<storage, read> ref_total: array<u32>;
+@group(0) @binding(5) var<storage, read_write> prim_boxes: array<Aabb>;
+@group(0) @binding(6) var<storage, read_write> ref_tris: array<u32>;
 
 // [0]: the scene box
-@group(0) @binding(6) var<storage, read> scene_bounds: array<Aabb>;
+@group(0) @binding(7) var<storage, read> scene_bounds: array<Aabb>;
+
+// The first reference of triangle i.
+fn first_reference(i: u32) -> u32 {
+    return ref_offsets[i] + block_offsets[i / SCAN_BLOCK];
+}
 
 #include "split_grid.wgsl"
 
@@ -148,10 +156,10 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let t = triangles[i];
-    var out = ref_offsets[i];
+    var out = first_reference(i);
     var end = ref_total[0];
     if i + 1u < params.count {
-        end = ref_offsets[i + 1u];
+        end = first_reference(i + 1u);
     }
     let grid = split_grid();
     let lo = min(t.v0, min(t.v1, t.v2));

@@ -3,8 +3,8 @@
 //! next level, recursively until one block remains; `counts_add.wgsl` adds the scanned totals back,
 //! top down. The grand total ends in the `total()` buffer. Several equal-length arrays stored back
 //! to back ("columns") are scanned independently by the same dispatches. A consumer that can add
-//! a block's offset itself skips the last add-back (`record_block_local`): BVH compaction reads
-//! its two scans that way. Used by BVH compaction and pre-splitting.
+//! a block's offset itself skips the last add-back (`record_block_local`): BVH compaction (two
+//! columns) and pre-splitting read their scans that way; `record` gives the plain scan.
 
 use bytemuck::{Pod, Zeroable};
 

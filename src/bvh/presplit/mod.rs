@@ -171,7 +171,8 @@ impl PreSplitter {
                 pass.dispatch(&self.count_splits, grid, &budget_params, &budget_buffers);
             }
             pass.dispatch(&self.write_counts, grid, &budget_params, &budget_buffers);
-            self.scan.record(&mut pass, &s.ref_offsets, n)?;
+            self.scan
+                .record_block_local(&mut pass, &s.ref_offsets, n, 1)?;
         }
         let mut pass = rec.pass("split");
         pass.dispatch_items(
@@ -180,6 +181,7 @@ impl PreSplitter {
             &[
                 &geometry.triangles,
                 &s.ref_offsets,
+                self.scan.block_offsets(),
                 self.scan.total(),
                 prim_boxes,
                 ref_tris,

@@ -4,4 +4,4 @@
 use crate::gpu::{kernel, Items};
 
 kernel!(pub TRIANGLES_SPLIT: Items = "triangles_split"::"main", [64, 1, 1],
-    [Read, Read, Read, ReadWrite, ReadWrite, Read]);
+    [Read, Read, Read, Read, ReadWrite, ReadWrite, Read]);
