@@ -31,6 +31,11 @@ fn slots_in_octant_order(mask: u32, flip: u32) -> u32 {
     return m;
 }
 
+// Sort keys of the internal children: the bits of the entry distance that a key keeps (no sign,
+// not the three low bits, which hold the child's offset), and the key of a child not hit.
+const KEY_ENTRY: u32 = 0x7ffffff8u;
+const NO_KEY: u32 = 0xffffffffu;
+
 // Eight keys in ascending order (Batcher's odd-even merge sort, 19 comparators): keys 0-3 in
 // `low`, 4-7 in `high`, and the same for the result.
 fn sort_keys(low: vec4<u32>, high: vec4<u32>) -> array<vec4<u32>, 2> {
@@ -151,24 +156,24 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_ze
                 return TraceResult(best, overflow);
             }
         }
-        // The internal children hit, nearest first: keys of a child's entry distance (>= t_min >=
-        // 0, and non-negative floats order as their bits) with its offset from child_base in the
-        // low three bits, sorted. A group: (child base, offsets in order, three bits each, | count << 24, entry of
-        // the second child).
+        // The internal children hit, nearest first: sorted keys of a child's entry distance with
+        // its offset from child_base in the low three bits. Entries are >= t_min >= 0, and
+        // non-negative floats order as their bits once the sign bit of a -0.0 is cleared. A group:
+        // (child base, offsets in order, three bits each, | count << 24, entry of the second).
         let hit_inner = entered & imask;
         let inner_low = (vec4<u32>(hit_inner) & vec4<u32>(1u, 2u, 4u, 8u)) != vec4<u32>(0u);
         let inner_high = (vec4<u32>(hit_inner >> 4u) & vec4<u32>(1u, 2u, 4u, 8u)) != vec4<u32>(0u);
         let offsets_low = countOneBits(vec4<u32>(imask) & vec4<u32>(0u, 1u, 3u, 7u));
         let offsets_high = countOneBits(vec4<u32>(imask) & vec4<u32>(15u, 31u, 63u, 127u));
         let keys = sort_keys(
-            select(vec4<u32>(0xffffffffu), (bitcast<vec4<u32>>(entry[0]) & vec4<u32>(~7u)) | offsets_low, inner_low),
-            select(vec4<u32>(0xffffffffu), (bitcast<vec4<u32>>(entry[1]) & vec4<u32>(~7u)) | offsets_high, inner_high),
+            select(vec4<u32>(NO_KEY), (bitcast<vec4<u32>>(entry[0]) & vec4<u32>(KEY_ENTRY)) | offsets_low, inner_low),
+            select(vec4<u32>(NO_KEY), (bitcast<vec4<u32>>(entry[1]) & vec4<u32>(KEY_ENTRY)) | offsets_high, inner_high),
         );
         let count = countOneBits(hit_inner);
         let order = (keys[0].x & 7u) | ((keys[0].y & 7u) << 3u) | ((keys[0].z & 7u) << 6u) | ((keys[0].w & 7u) << 9u)
             | ((keys[1].x & 7u) << 12u) | ((keys[1].y & 7u) << 15u) | ((keys[1].z & 7u) << 18u) | ((keys[1].w & 7u) << 21u);
         // The second child's key without its low bits: its entry distance, rounded down.
-        var group = vec3<u32>(node.child_base, order | (count << 24u), keys[0].y & ~7u);
+        var group = vec3<u32>(node.child_base, order | (count << 24u), keys[0].y & KEY_ENTRY);
         if count == 0u {
             var found = false;
             while sp > 0u {
