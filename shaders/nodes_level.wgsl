@@ -35,7 +35,7 @@ var<workgroup> climbing: atomic<u32>;
 var<workgroup> any_climbing: u32;
 
 fn node_area(node: u32) -> f32 {
-    return surface_area(nodes[node].min, nodes[node].max);
+    return surface_area(nodes[node].min, nodes[node].max, params.zero);
 }
 
 fn is_root(node: u32) -> bool {

@@ -10,6 +10,7 @@
 // references (has_refs) an output leaf counts each triangle once: its references are gathered
 // depth-first and mapped to triangle ids, duplicates dropped.
 #include "bvh_node.wgsl"
+#include "unfused.wgsl"
 
 struct CollapseParams {
     // Leaves of the working tree (at most; see count_limit): it has 2n - 1 nodes.
@@ -17,7 +18,7 @@ struct CollapseParams {
     row_pitch: u32,
     max_leaf_size: u32,
     ct: f32,
-    // Always 0: see `unfused` in treelet_round.wgsl; the area must round as it did there, so
+    // Always 0: see unfused.wgsl; the area must round as it did in the treelet rounds, so
     // that Ct·A·N <= C finds exactly the leaves the treelet pass chose.
     zero: u32,
     has_refs: u32,
@@ -43,18 +44,13 @@ struct CollapseParams {
 
 #include "leaf_gather.wgsl"
 
-fn unfused(x: f32) -> f32 {
-    return bitcast<f32>(bitcast<u32>(x) ^ params.zero);
-}
-
 fn collapses(node: u32) -> bool {
     let b = nodes[node];
     if (b.right_or_count & LEAF_FLAG) != 0u {
         return true;
     }
     let n = prim_counts[node];
-    let e = b.max - b.min;
-    let a = 2.0 * (unfused(e.x * e.y) + unfused(e.y * e.z) + unfused(e.z * e.x));
+    let a = surface_area(b.min, b.max, params.zero);
     return n <= params.max_leaf_size && params.ct * a * f32(n) <= costs[node];
 }
 

@@ -25,14 +25,7 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_ze
         var descend = false;
         if (node.right_or_count & LEAF_FLAG) != 0u {
             let first = node.left_or_first;
-            let end = first + (node.right_or_count & ~LEAF_FLAG);
-            for (var i = first; i < end; i++) {
-                let tri_index = prim_indices[i];
-                let h = intersect_triangle(test, triangles[tri_index], t_min, best.t);
-                if h.w != 0.0 {
-                    best = Hit(h.x, tri_index, h.y, h.z);
-                }
-            }
+            intersect_leaf(first, first + (node.right_or_count & ~LEAF_FLAG), test, t_min, &best);
             if any_hit && best.tri != MISS {
                 return TraceResult(best, overflow);
             }

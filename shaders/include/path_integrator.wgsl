@@ -32,7 +32,7 @@ struct TraceParams {
     sky: vec3<f32>,
     samples: u32,
     light_count: u32,
-    // Always 0 (see `opaque` in ray_triangle.wgsl).
+    // Always 0 (see unfused.wgsl).
     opaque_zero: u32,
     // This dispatch's pair of `counters`.
     counter_slot: u32,

@@ -6,7 +6,7 @@
 struct QueryParams {
     ray_count: u32,
     row_pitch: u32,
-    // Always 0 (see `opaque` in ray_triangle.wgsl).
+    // Always 0 (see unfused.wgsl).
     opaque_zero: u32,
     // 1: any hit in the interval, 0: the closest hit.
     any_hit: u32,

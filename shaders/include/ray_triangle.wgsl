@@ -1,9 +1,10 @@
 // Watertight ray/triangle intersection (Woop, Benthin & Wald 2013, JCGT 2(1)), the twin of
 // src/geometry/ray_triangle.rs operation for operation (see there for why no ray escapes through
-// a closed mesh). Every product goes through `opaque` so that the compiler cannot fuse it into the
+// a closed mesh). Every product goes through `unfused` so that the compiler cannot fuse it into the
 // following add or subtract: hit-or-miss decisions then use only correctly rounded multiplies and
 // subtractions and equal the CPU's bit for bit; only the division for t may differ by a few ulps.
 // Needs `Triangle` (bvh_node.wgsl).
+#include "unfused.wgsl"
 
 struct RayTriangleTest {
     origin: vec3<f32>,
@@ -15,11 +16,6 @@ struct RayTriangleTest {
     dz: f32,
     // Always 0, read from a uniform by the kernel: the compiler cannot see through it.
     opaque_zero: u32,
-}
-
-// x, unchanged, but no longer a product the compiler may contract into an FMA.
-fn opaque(x: f32, zero: u32) -> f32 {
-    return bitcast<f32>(bitcast<u32>(x) ^ zero);
 }
 
 // v reordered to (kx, ky, kz) with kx = kz + 1, ky = kz + 2 (mod 3).
@@ -51,14 +47,14 @@ fn sheared(test: RayTriangleTest, p: vec3<f32>) -> vec2<f32> {
     let s = test.shear;
     let z = test.opaque_zero;
     return vec2<f32>(
-        opaque(s.z * p.x, z) - opaque(s.x * p.z, z),
-        opaque(s.z * p.y, z) - opaque(s.y * p.z, z),
+        unfused(s.z * p.x, z) - unfused(s.x * p.z, z),
+        unfused(s.z * p.y, z) - unfused(s.y * p.z, z),
     );
 }
 
 // p.x * q.y - p.y * q.x: exactly negated when p and q swap.
 fn edge_function(p: vec2<f32>, q: vec2<f32>, zero: u32) -> f32 {
-    return opaque(p.x * q.y, zero) - opaque(p.y * q.x, zero);
+    return unfused(p.x * q.y, zero) - unfused(p.y * q.x, zero);
 }
 
 // vec4(t, u, v, 1) when the ray hits with t_min < t < t_max (u, v: barycentric weights of v1
@@ -79,7 +75,7 @@ fn intersect_triangle(test: RayTriangleTest, tri: Triangle, t_min: f32, t_max: f
     if !inside || det == 0.0 {
         return vec4<f32>(0.0);
     }
-    let scaled_t = opaque(u * a.z, z) + opaque(v * b.z, z) + opaque(w * c.z, z);
+    let scaled_t = unfused(u * a.z, z) + unfused(v * b.z, z) + unfused(w * c.z, z);
     let t = scaled_t / (det * test.dz);
     if t > t_min && t < t_max {
         return vec4<f32>(t, v / det, w / det, 1.0);

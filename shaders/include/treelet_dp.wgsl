@@ -35,7 +35,7 @@ var<private> leaf_prims: array<u32, MAX_TREELET>;
 var<private> internal_node: array<u32, MAX_TREELET>;
 
 fn node_area(node: u32) -> f32 {
-    return surface_area(nodes[node].min, nodes[node].max);
+    return surface_area(nodes[node].min, nodes[node].max, params.zero);
 }
 
 fn is_leaf_node(node: u32) -> bool {
@@ -200,12 +200,12 @@ fn optimize_treelet(root: u32) {
             c = costs[leaf_node[firstTrailingBit(s)]];
         } else {
             let best = bitcast<f32>(best_partition(s).y);
-            c = combine_cost(surface_area(subset_min(s), subset_max(s)), subset_prims(s), best);
+            c = combine_cost(surface_area(subset_min(s), subset_max(s), params.zero), subset_prims(s), best);
         }
         dp_cost[s - 1u] = c;
     }
     let best = best_partition(full);
-    let full_area = surface_area(subset_min(full), subset_max(full));
+    let full_area = surface_area(subset_min(full), subset_max(full), params.zero);
     let full_cost = combine_cost(full_area, subset_prims(full), bitcast<f32>(best.y));
     if full_cost < current {
         write_back(root, best.x, full_cost);

@@ -1,9 +1,10 @@
 // What the kernels of one treelet restructuring round share (Karras & Aila 2013, §3-4): their
-// parameters, the schedule buffer's layout, surface areas and the SAH cost of a node. Twins:
+// parameters, the schedule buffer's layout, a node's surface area and its SAH cost. Twins:
 // `RoundParams` (src/bvh/treelet/rounds.rs), `surface_area` and `CostModel::combine`
 // (src/bvh/treelet/dp.rs).
 
 #include "constants.wgsl"
+#include "unfused.wgsl"
 
 struct RoundParams {
     // Leaves of the working tree (at most; see count_limit): it has 2n - 1 nodes.
@@ -15,7 +16,7 @@ struct RoundParams {
     max_leaf_size: u32,
     ci: f32,
     ct: f32,
-    // Always 0 (see `unfused`).
+    // Always 0 (see unfused.wgsl).
     zero: u32,
     // Levels processed by one dispatch each (treelets_optimize); the levels above them are
     // processed by treelets_climb.
@@ -36,18 +37,6 @@ const SCHEDULE_ARGS: u32 = 2u * (MAX_LEVEL_DISPATCHES + 1u);
 
 const F32_MAX: f32 = 3.40282347e38;
 
-// XOR with a zero the compiler cannot see keeps a product from being fused into a following add
-// (FMA contraction, which GPU compilers do and WGSL allows). Used for surface areas only: the
-// collapse (nodes_mark.wgsl) recomputes a node's area to find the leaves the rounds chose
-// (Ct·A·N == C), so every kernel must round it identically.
-fn unfused(x: f32) -> f32 {
-    return bitcast<f32>(bitcast<u32>(x) ^ params.zero);
-}
-
-fn surface_area(lo: vec3<f32>, hi: vec3<f32>) -> f32 {
-    let e = hi - lo;
-    return 2.0 * (unfused(e.x * e.y) + unfused(e.y * e.z) + unfused(e.z * e.x));
-}
 
 // Cost of a node of area a and n primitives whose children cost `children` in total:
 // min(Ci·a + children, Ct·a·n where a leaf of n primitives is allowed).

@@ -17,6 +17,7 @@
 // device, up to the numbering of nodes and reference blocks (allocation order).
 #include "bvh_node.wgsl"
 #include "wide_node.wgsl"
+#include "unfused.wgsl"
 
 struct WideParams {
     // Level of the tree this dispatch emits (0: the root); the per-level kernel only.
@@ -25,7 +26,7 @@ struct WideParams {
     level_dispatches: u32,
     // Wide nodes `wide_nodes` holds.
     capacity: u32,
-    // Always 0 (see `unfused`).
+    // Always 0 (see unfused.wgsl).
     zero: u32,
 }
 
@@ -34,7 +35,6 @@ struct WideParams {
 @group(0) @binding(2) var<storage, read> prim_indices: array<u32>;
 @group(0) @binding(3) var<storage, read_write> wide_nodes: array<WideNode>;
 @group(0) @binding(4) var<storage, read_write> wide_prims: array<u32>;
-// Binary node of each wide node.
 // Binary node of each wide node.
 @group(0) @binding(5) var<storage, read_write> wide_sources: array<u32>;
 // [0] wide nodes allocated, [1] references written, [2] capacity overflows.
@@ -52,14 +52,9 @@ fn record_word(level: u32, word: u32) -> u32 {
     return RECORD_WORDS * level + word;
 }
 
-// x, with the product that computed it kept apart from any following addition.
-fn unfused(x: f32) -> f32 {
-    return bitcast<f32>(bitcast<u32>(x) ^ params.zero);
-}
-
 fn half_area(lo: vec3<f32>, hi: vec3<f32>) -> f32 {
     let e = hi - lo;
-    return unfused(e.x * e.y) + unfused(e.y * e.z) + unfused(e.z * e.x);
+    return unfused(e.x * e.y, params.zero) + unfused(e.y * e.z, params.zero) + unfused(e.z * e.x, params.zero);
 }
 
 // The smallest biased exponent e (1..=253) with lo + 255·2^(e−127) ≥ hi.

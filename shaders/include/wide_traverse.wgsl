@@ -144,14 +144,7 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_ze
                 continue;
             }
             let first = leaf_first(node, slot);
-            let end = first + slot_byte(node.leaf_counts, slot);
-            for (var i = first; i < end; i++) {
-                let tri_index = prim_indices[i];
-                let h = intersect_triangle(test, triangles[tri_index], t_min, best.t);
-                if h.w != 0.0 {
-                    best = Hit(h.x, tri_index, h.y, h.z);
-                }
-            }
+            intersect_leaf(first, first + slot_byte(node.leaf_counts, slot), test, t_min, &best);
             if any_hit && best.tri != MISS {
                 return TraceResult(best, overflow);
             }

@@ -14,10 +14,10 @@
 //! `a − b = −(b − a)` in IEEE arithmetic). Zero counts as inside for both, so the neighbours leave
 //! no crack. This holds only if no product is fused into a following add or subtract (FMA
 //! contraction, which GPU compilers do and WGSL allows): the kernel passes every product through
-//! `opaque`, an XOR with a zero the compiler cannot see. With that, hit-or-miss decisions use only
-//! correctly rounded multiplies and subtractions and are bit-identical on the CPU and on any
-//! Vulkan device (up to denormals, which GPUs may flush); only the final division for `t` is
-//! approximate on some GPUs (a few ulps).
+//! `unfused` (unfused.wgsl), an XOR with a zero the compiler cannot see. With that, hit-or-miss
+//! decisions use only correctly rounded multiplies and subtractions and are bit-identical on the
+//! CPU and on any Vulkan device (up to denormals, which GPUs may flush); only the final division
+//! for `t` is approximate on some GPUs (a few ulps).
 //!
 //! Both windings hit. A triangle seen exactly edge-on (U + V + W = 0) is missed; its neighbours
 //! cover the ray.

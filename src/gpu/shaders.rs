@@ -50,6 +50,10 @@ const INCLUDES: &[(&str, &str)] = &[
         include_str!("../../shaders/include/treelet_round.wgsl"),
     ),
     (
+        "unfused.wgsl",
+        include_str!("../../shaders/include/unfused.wgsl"),
+    ),
+    (
         "ray_box.wgsl",
         include_str!("../../shaders/include/ray_box.wgsl"),
     ),

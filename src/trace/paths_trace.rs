@@ -21,7 +21,7 @@ pub struct TraceParams {
     pub sky: [f32; 3],
     pub samples: u32,
     pub light_count: u32,
-    /// Always 0: keeps the triangle test's products unfused (`opaque` in ray_triangle.wgsl).
+    /// Always 0: keeps the triangle test's products unfused (`unfused` in unfused.wgsl).
     pub opaque_zero: u32,
     /// Which pair of `counters` this dispatch adds its rays and stack overflows to.
     pub counter_slot: u32,

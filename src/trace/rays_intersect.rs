@@ -17,7 +17,7 @@ use crate::{Error, Result};
 pub struct QueryParams {
     ray_count: u32,
     row_pitch: u32,
-    /// Always 0: keeps the triangle test's products unfused (`opaque` in ray_triangle.wgsl).
+    /// Always 0: keeps the triangle test's products unfused (`unfused` in unfused.wgsl).
     opaque_zero: u32,
     /// 1: any hit in the interval (stops at the first), 0: the closest hit.
     any_hit: u32,

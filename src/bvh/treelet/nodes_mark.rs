@@ -12,7 +12,7 @@ pub struct MarkParams {
     pub row_pitch: u32,
     pub max_leaf_size: u32,
     pub ct: f32,
-    /// Always 0: keeps the kernel's area products unfused (see `unfused` in the shader).
+    /// Always 0: keeps the kernel's area products unfused (see unfused.wgsl).
     pub zero: u32,
     /// 1 when the primitives are pre-split references mapped through `ref_tris`.
     pub has_refs: u32,

@@ -29,7 +29,7 @@ pub struct RoundParams {
     max_leaf_size: u32,
     ci: f32,
     ct: f32,
-    /// Always 0: keeps the kernels' area products unfused (see `unfused` in the shaders).
+    /// Always 0: keeps the kernels' area products unfused (see unfused.wgsl).
     zero: u32,
     level_dispatches: u32,
     level: u32,
