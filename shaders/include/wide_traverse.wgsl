@@ -80,6 +80,33 @@ fn sort_keys(low: vec4<u32>, high: vec4<u32>) -> array<vec4<u32>, 2> {
     return array<vec4<u32>, 2>(vec4<u32>(l.x, lo3.x, hi3.x, lo3.y), vec4<u32>(hi3.y, lo3.z, hi3.z, h.w));
 }
 
+// Four child boxes against the ray: their entry distances and a bit per box entered.
+struct SlabHits {
+    entry: vec4<f32>,
+    entered: u32,
+}
+
+// `near` and `far`: per axis, the word of four quantized planes the ray crosses first and last;
+// a plane's distance is its byte times `scale` plus the offset.
+fn slab_test(near: vec3<u32>, far: vec3<u32>, scale: vec3<f32>, near_offset: vec3<f32>, far_offset: vec3<f32>, t_min: f32, t_max: f32) -> SlabHits {
+    let enter = max(
+        max(
+            vec4<f32>(unpack4xU8(near.x)) * scale.x + near_offset.x,
+            vec4<f32>(unpack4xU8(near.y)) * scale.y + near_offset.y,
+        ),
+        max(vec4<f32>(unpack4xU8(near.z)) * scale.z + near_offset.z, vec4<f32>(t_min)),
+    );
+    let exit = min(
+        min(
+            vec4<f32>(unpack4xU8(far.x)) * scale.x + far_offset.x,
+            vec4<f32>(unpack4xU8(far.y)) * scale.y + far_offset.y,
+        ),
+        min(vec4<f32>(unpack4xU8(far.z)) * scale.z + far_offset.z, vec4<f32>(t_max)),
+    ) * BOX_EXIT_SLACK;
+    let bits = select(vec4<u32>(0u), vec4<u32>(1u, 2u, 4u, 8u), enter <= exit);
+    return SlabHits(enter, bits.x | bits.y | bits.z | bits.w);
+}
+
 fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_zero: u32, any_hit: bool) -> TraceResult {
     var best = Hit(t_max, MISS, 0.0, 0.0);
     let test = ray_triangle_test(origin, dir, opaque_zero);
@@ -110,37 +137,19 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_ze
         let far_x = select(node.lo_x, node.hi_x, near_is_lo.x);
         let far_y = select(node.lo_y, node.hi_y, near_is_lo.y);
         let far_z = select(node.lo_z, node.hi_z, near_is_lo.z);
-        // Slots 0..3, then 4..7, four boxes at a time.
-        var entered = 0u;
-        var entry: array<vec4<f32>, 2>;
-        for (var half = 0u; half < 2u; half++) {
-            let enter = max(
-                max(
-                    vec4<f32>(unpack4xU8(near_x[half])) * scale.x + near_offset.x,
-                    vec4<f32>(unpack4xU8(near_y[half])) * scale.y + near_offset.y,
-                ),
-                max(vec4<f32>(unpack4xU8(near_z[half])) * scale.z + near_offset.z, vec4<f32>(t_min)),
-            );
-            let exit = min(
-                min(
-                    vec4<f32>(unpack4xU8(far_x[half])) * scale.x + far_offset.x,
-                    vec4<f32>(unpack4xU8(far_y[half])) * scale.y + far_offset.y,
-                ),
-                min(vec4<f32>(unpack4xU8(far_z[half])) * scale.z + far_offset.z, vec4<f32>(best.t)),
-            ) * BOX_EXIT_SLACK;
-            entry[half] = enter;
-            let bits = select(vec4<u32>(0u), vec4<u32>(1u, 2u, 4u, 8u), enter <= exit);
-            entered |= (bits.x | bits.y | bits.z | bits.w) << (4u * half);
-        }
+        // Slots 0..3, then 4..7, four boxes at a time. The halves are values, not an array:
+        // an array indexed by a slot would live in memory (a GPU's local memory).
+        let low = slab_test(vec3<u32>(near_x.x, near_y.x, near_z.x), vec3<u32>(far_x.x, far_y.x, far_z.x), scale, near_offset, far_offset, t_min, best.t);
+        let high = slab_test(vec3<u32>(near_x.y, near_y.y, near_z.y), vec3<u32>(far_x.y, far_y.y, far_z.y), scale, near_offset, far_offset, t_min, best.t);
         let occupied = imask | slot_mask(node.leaf_counts);
-        entered &= occupied;
+        let entered = (low.entered | (high.entered << 4u)) & occupied;
         // Leaves near-first (octant order), each skipped once a hit nearer than its box is found.
         var leaves = slots_in_octant_order(entered & ~imask, octant_flip);
         while leaves != 0u {
             let position = firstLeadingBit(leaves);
             leaves ^= 1u << position;
             let slot = position ^ octant_flip;
-            if entry[slot >> 2u][slot & 3u] > best.t * BOX_EXIT_SLACK {
+            if select(low.entry, high.entry, slot >= 4u)[slot & 3u] > best.t * BOX_EXIT_SLACK {
                 continue;
             }
             let first = leaf_first(node, slot);
@@ -159,8 +168,8 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_ze
         let offsets_low = countOneBits(vec4<u32>(imask) & vec4<u32>(0u, 1u, 3u, 7u));
         let offsets_high = countOneBits(vec4<u32>(imask) & vec4<u32>(15u, 31u, 63u, 127u));
         let keys = sort_keys(
-            select(vec4<u32>(NO_KEY), (bitcast<vec4<u32>>(entry[0]) & vec4<u32>(KEY_ENTRY)) | offsets_low, inner_low),
-            select(vec4<u32>(NO_KEY), (bitcast<vec4<u32>>(entry[1]) & vec4<u32>(KEY_ENTRY)) | offsets_high, inner_high),
+            select(vec4<u32>(NO_KEY), (bitcast<vec4<u32>>(low.entry) & vec4<u32>(KEY_ENTRY)) | offsets_low, inner_low),
+            select(vec4<u32>(NO_KEY), (bitcast<vec4<u32>>(high.entry) & vec4<u32>(KEY_ENTRY)) | offsets_high, inner_high),
         );
         let count = countOneBits(hit_inner);
         let order = (keys[0].x & 7u) | ((keys[0].y & 7u) << 3u) | ((keys[0].z & 7u) << 6u) | ((keys[0].w & 7u) << 9u)
