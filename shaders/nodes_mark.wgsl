@@ -5,10 +5,10 @@
 // ancestor collapses; a kept collapsing node becomes an output leaf holding its N primitives.
 // One invocation per node walks up its parent links, only as far as the first ancestor of more
 // than max_leaf_size primitives: no ancestor from there up can collapse (counts grow upwards), so
-// the walk takes at most max_leaf_size steps instead of the node's depth. Writes flags (bit 0 kept, bit 1 output leaf)
-// and the two inputs of the compaction scans (kept count, leaf primitive count). With pre-split
-// references (has_refs) an output leaf counts each triangle once: its references are gathered
-// depth-first and mapped to triangle ids, duplicates dropped.
+// the walk takes at most max_leaf_size steps instead of the node's depth. Writes flags (bit 0
+// kept, bit 1 output leaf) and the two inputs of the compaction scans (kept count, leaf primitive
+// count). With pre-split references (has_refs) an output leaf counts each triangle once: its
+// references are gathered depth-first and mapped to triangle ids, duplicates dropped.
 #include "bvh_node.wgsl"
 #include "unfused.wgsl"
 
@@ -57,14 +57,14 @@ fn collapses(node: u32) -> bool {
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x + gid.y * params.row_pitch;
-    let column = 2u * params.leaf_count - 1u;
-    if i >= column {
+    let column_len = 2u * params.leaf_count - 1u;
+    if i >= column_len {
         return;
     }
     if i >= 2u * min(params.leaf_count, count_limit[0]) - 1u {
         flags[i] = 0u;
         scans[i] = 0u;
-        scans[column + i] = 0u;
+        scans[column_len + i] = 0u;
         return;
     }
     var kept = true;
@@ -86,5 +86,5 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if leaf {
         prims = select(prim_counts[i], gather_leaf(i), params.has_refs != 0u);
     }
-    scans[column + i] = prims;
+    scans[column_len + i] = prims;
 }

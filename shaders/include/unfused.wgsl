@@ -10,8 +10,14 @@ fn unfused(x: f32, zero: u32) -> f32 {
     return bitcast<f32>(bitcast<u32>(x) ^ zero);
 }
 
+// Half the surface area of the box [lo, hi] (the wide conversion's SAH unit; CPU twin: `half_area`
+// in src/bvh/wide/convert.rs).
+fn half_area(lo: vec3<f32>, hi: vec3<f32>, zero: u32) -> f32 {
+    let e = hi - lo;
+    return unfused(e.x * e.y, zero) + unfused(e.y * e.z, zero) + unfused(e.z * e.x, zero);
+}
+
 // Surface area of the box [lo, hi] (CPU twin: `surface_area` in src/bvh/treelet/dp.rs).
 fn surface_area(lo: vec3<f32>, hi: vec3<f32>, zero: u32) -> f32 {
-    let e = hi - lo;
-    return 2.0 * (unfused(e.x * e.y, zero) + unfused(e.y * e.z, zero) + unfused(e.z * e.x, zero));
+    return 2.0 * half_area(lo, hi, zero);
 }

@@ -52,11 +52,6 @@ fn record_word(level: u32, word: u32) -> u32 {
     return RECORD_WORDS * level + word;
 }
 
-fn half_area(lo: vec3<f32>, hi: vec3<f32>) -> f32 {
-    let e = hi - lo;
-    return unfused(e.x * e.y, params.zero) + unfused(e.y * e.z, params.zero) + unfused(e.z * e.x, params.zero);
-}
-
 // The smallest biased exponent e (1..=253) with lo + 255·2^(e−127) ≥ hi.
 fn axis_exponent(lo: f32, hi: f32) -> u32 {
     let bits = bitcast<u32>(hi - lo);
@@ -120,7 +115,7 @@ fn emit_wide_node(w: u32, source: u32, base: ptr<function, u32>) -> u32 {
         var widest_area = -1.0;
         for (var j = 0u; j < count; j++) {
             if (child[j].right_or_count & LEAF_FLAG) == 0u {
-                let a = half_area(child[j].min, child[j].max);
+                let a = half_area(child[j].min, child[j].max, params.zero);
                 if a > widest_area {
                     widest = j;
                     widest_area = a;
