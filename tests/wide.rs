@@ -10,17 +10,18 @@ use common::{
     assert_hits_match, convert_wide, gpu, oracle_hits, random_soup, record_update, scene_of,
     test_rays,
 };
+use glam::Vec3;
 use treelet::bvh::treelet::TreeletSettings;
 use treelet::bvh::wide::{
-    validate_wide, validate_wide_with_references, Layout, Slot, WideBvh, WIDTH,
+    max_wide_nodes, validate_wide, validate_wide_with_references, Layout, Slot, WideBvh, WIDTH,
 };
 use treelet::bvh::{
-    build_sweep_sah, read_wide_bvh, write_wide_bvh, Builder, SahParams, TreeUpdater, UpdateMode,
-    ValidationError, DEFAULT_SPLIT_PERCENT,
+    build_sweep_sah, read_wide_bvh, validate, write_wide_bvh, Builder, Bvh, BvhNode, SahParams,
+    TreeUpdater, UpdateMode, ValidationError, DEFAULT_SPLIT_PERCENT,
 };
 use treelet::device::{Geometry, Tree};
-use treelet::geometry::Ray;
-use treelet::scene::{load_scene, Scene};
+use treelet::geometry::{Aabb, Ray};
+use treelet::scene::{load_scene, Scene, Triangle};
 use treelet::trace::{any_hits_wide, closest_hits, closest_hits_wide, PathTracer, RenderSettings};
 
 /// The tree as a sequence independent of node and reference-block numbering: each node's frame,
@@ -181,6 +182,76 @@ fn wide_hits_equal_brute_force() {
         let hits = closest_hits_wide(gpu(), &geometry, &tree, &plain).unwrap();
         assert_hits_match(&scene.triangles, &rays, &hits);
     }
+}
+
+/// A balanced binary tree over `triangles` (a power of two of them), one reference per leaf:
+/// sorted by centroid x and halved.
+fn balanced_tree(triangles: &[Triangle]) -> Bvh {
+    fn add(
+        nodes: &mut Vec<BvhNode>,
+        triangles: &[Triangle],
+        order: &[u32],
+        first: u32,
+        count: u32,
+    ) {
+        let range = &order[first as usize..(first + count) as usize];
+        let bounds = range
+            .iter()
+            .fold(Aabb::EMPTY, |b, &t| b.union(triangles[t as usize].bounds()));
+        let index = nodes.len();
+        nodes.push(BvhNode::leaf(bounds, first, 1));
+        if count > 1 {
+            let left = nodes.len() as u32;
+            add(nodes, triangles, order, first, count / 2);
+            let right = nodes.len() as u32;
+            add(nodes, triangles, order, first + count / 2, count / 2);
+            nodes[index] = BvhNode::internal(bounds, left, right);
+        }
+    }
+    let mut order: Vec<u32> = (0..triangles.len() as u32).collect();
+    let x = |t: u32| triangles[t as usize].bounds().centroid().x;
+    order.sort_by(|&a, &b| x(a).total_cmp(&x(b)));
+    let mut nodes = Vec::new();
+    add(&mut nodes, triangles, &order, 0, triangles.len() as u32);
+    Bvh {
+        nodes,
+        prim_indices: order,
+    }
+}
+
+/// A balanced tree of 2·8^k leaves converts into the most wide nodes a tree of its size can make
+/// (`max_wide_nodes`: 73 for 128 leaves, nodes of 8 children down to nodes over two leaves), and
+/// the GPU's node buffer, sized from the binary buffer, holds exactly that many.
+#[test]
+fn largest_conversion_fits_the_node_buffer() {
+    // Unit cells along x: subtrees of as many leaves have boxes of the same area, so the greedy
+    // collapse opens them level by level.
+    let cells = (0..128)
+        .map(|i| {
+            let x = i as f32;
+            Triangle::new(
+                Vec3::new(x, 0.0, 0.0),
+                Vec3::new(x + 1.0, 0.0, 1.0),
+                Vec3::new(x, 1.0, 1.0),
+                0,
+            )
+        })
+        .collect();
+    let scene = scene_of(cells);
+    let bvh = balanced_tree(&scene.triangles);
+    validate(&bvh, &scene.triangles).unwrap();
+    let mut tree = Tree::upload(gpu(), &bvh).unwrap();
+    convert_wide(&mut tree);
+    let wide_tree = tree.wide.as_ref().unwrap();
+    assert_eq!(wide_tree.capacity, max_wide_nodes(128));
+    // Fails if the conversion ran out of room.
+    let wide = wide_tree.download(gpu()).unwrap();
+    assert_eq!(wide.nodes.len(), 73);
+    validate_wide(&wide, &scene.triangles).unwrap();
+    assert_eq!(
+        canonical(&wide),
+        canonical(&WideBvh::from_binary(&bvh).unwrap())
+    );
 }
 
 /// Wide nodes and references take at most 0.7× the bytes of the binary tree they come from.

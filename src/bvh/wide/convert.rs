@@ -34,6 +34,17 @@ pub fn check_leaf_sizes(bvh: &Bvh) -> Result<()> {
     }
 }
 
+/// The most wide nodes the conversion makes from a binary tree of `leaves` leaves (at least 1).
+/// A wide node with fewer than 8 children has only leaves as children (`open_children` opens
+/// internal children while a slot is free), and at least two of them unless it is a root over a
+/// single leaf. With F nodes of 8 children (a of them leaves, in all) and T other nodes, the
+/// N − 1 nodes below the root are the internal children: N − 1 = 8F − a, with a + 2T ≤ leaves,
+/// so N = F + T = (8T + a − 1) / 7 ≤ (4 · leaves − 1) / 7. A balanced tree of 16 leaves makes 9.
+pub fn max_wide_nodes(leaves: u32) -> u32 {
+    // (4 · u32::MAX − 1) / 7 < u32::MAX.
+    ((4 * u64::from(leaves)).saturating_sub(1) / 7).max(1) as u32
+}
+
 fn half_area(n: &BvhNode) -> f32 {
     let e: [f32; 3] = std::array::from_fn(|a| n.max[a] - n.min[a]);
     e[0] * e[1] + e[1] * e[2] + e[2] * e[0]
@@ -218,6 +229,8 @@ impl WideBvh {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::Aabb;
+    use glam::Vec3;
 
     /// Values spread over magnitudes and signs, with offsets far from the origin and tiny or
     /// zero extents.
@@ -243,6 +256,51 @@ mod tests {
             }
         }
         out
+    }
+
+    /// A binary tree of `leaves` one-reference leaves, split in halves (leaves a power of two: a
+    /// balanced tree), boxes of unit cubes along x.
+    fn halving_tree(leaves: u32) -> Bvh {
+        fn add(nodes: &mut Vec<BvhNode>, first: u32, count: u32) -> usize {
+            let index = nodes.len();
+            let bounds = Aabb::new(
+                Vec3::new(first as f32, 0.0, 0.0),
+                Vec3::new((first + count) as f32, 1.0, 1.0),
+            );
+            nodes.push(BvhNode::leaf(bounds, first, 1));
+            if count > 1 {
+                let half = count / 2;
+                let l = add(nodes, first, half) as u32;
+                let r = add(nodes, first + half, count - half) as u32;
+                nodes[index] = BvhNode::internal(bounds, l, r);
+            }
+            index
+        }
+        let mut nodes = Vec::new();
+        add(&mut nodes, 0, leaves);
+        Bvh {
+            nodes,
+            prim_indices: (0..leaves).collect(),
+        }
+    }
+
+    #[test]
+    fn wide_node_bound_holds_and_is_reached() {
+        for leaves in 1..=300 {
+            let wide = WideBvh::from_binary(&halving_tree(leaves)).unwrap();
+            let bound = max_wide_nodes(leaves) as usize;
+            assert!(
+                wide.nodes.len() <= bound,
+                "{leaves} leaves: {} wide nodes, bound {bound}",
+                wide.nodes.len()
+            );
+            if leaves.is_power_of_two() && leaves.trailing_zeros() % 3 == 1 {
+                // 2·8^k leaves: 8-child nodes down to nodes over two leaves.
+                assert_eq!(wide.nodes.len(), bound, "{leaves} leaves");
+            }
+        }
+        assert_eq!(max_wide_nodes(16), 9);
+        assert_eq!(max_wide_nodes(u32::MAX), 2_454_267_025);
     }
 
     #[test]

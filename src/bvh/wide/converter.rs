@@ -4,6 +4,7 @@
 //! whose size the previous level wrote (`wide_nodes_emit`); whatever lies deeper is emitted by
 //! one workgroup, level after level (`wide_nodes_finish`). No CPU round trip.
 
+use super::convert::max_wide_nodes;
 use super::wide_nodes_emit::{WideParams, WIDE_NODES_EMIT};
 use super::wide_nodes_finish::WIDE_NODES_FINISH;
 use crate::bvh::BvhNode;
@@ -50,9 +51,8 @@ impl WideConverter {
         let ctx = rec.ctx;
         let binary_nodes = (tree.nodes.size() / std::mem::size_of::<BvhNode>() as u64) as u32;
         let prims = (tree.prim_indices.size() / 4) as u32;
-        // A binary tree of n nodes has (n − 1) / 2 internal nodes, each the source of one wide
-        // node at most (and a single leaf makes one).
-        let capacity = (binary_nodes / 2).max(1);
+        // A binary tree in n nodes has at most (n + 1) / 2 leaves.
+        let capacity = max_wide_nodes(binary_nodes.div_ceil(2));
         let level_dispatches = self
             .forced_level_dispatches
             .unwrap_or_else(|| Self::level_dispatches(prims));

@@ -12,7 +12,7 @@ mod validate;
 mod wide_nodes_emit;
 mod wide_nodes_finish;
 
-pub use convert::{check_leaf_sizes, MAX_WIDE_LEAF_SIZE};
+pub use convert::{check_leaf_sizes, max_wide_nodes, MAX_WIDE_LEAF_SIZE};
 pub use converter::{WideConverter, MAX_WIDE_LEVEL_DISPATCHES};
 pub use node::{Slot, WideBvh, WideNode, WIDTH};
 pub use sah::wide_sah_costs;
