@@ -25,7 +25,7 @@ pub const ALL: &[&KernelInfo] = &[
     &bvh::treelet::NODES_COMPACT.info,
     &bvh::presplit::TRIANGLES_PRIORITY.info,
     &bvh::presplit::SPLITS_COUNT.info,
-    &bvh::presplit::SPLITS_WRITE_COUNTS.info,
+    &bvh::presplit::SPLITS_ASSIGN.info,
     &bvh::presplit::TRIANGLES_SPLIT.info,
     &bvh::NODES_REFIT.info,
     &trace::PATHS_TRACE.info,

@@ -15,13 +15,13 @@ pub const MORTON_GRID: u32 = 1 << 21;
 pub const MORTON_AXIS_BITS: u32 = 16;
 /// Splits per triangle at most in pre-splitting (pieces ≤ `MAX_SPLITS + 1`).
 pub const MAX_SPLITS: u32 = 31;
-/// Candidate scales the pre-splitting budget search evaluates per step (`splits_budget.wgsl`):
+/// Candidate scales the pre-splitting budget search evaluates per step (`splits_search.wgsl`):
 /// 15 split the interval in 16, so `SPLIT_SEARCH_STEPS` steps narrow 2^32 bit patterns to one.
 pub const SPLIT_SEARCH_CANDIDATES: u32 = 15;
 /// Steps of the pre-splitting budget search (one dispatch each).
 pub const SPLIT_SEARCH_STEPS: u32 = 8;
 /// Word of the budget search's state that holds the scale found: after q_max and the sums of
-/// every step's candidates (`splits_budget.wgsl`).
+/// every step's candidates (`splits_search.wgsl`).
 pub const SPLIT_SCALE_WORD: u32 = 1 + SPLIT_SEARCH_STEPS * SPLIT_SEARCH_CANDIDATES;
 /// Largest treelet (leaves): each treelet invocation keeps the costs of its 2^8 subsets and
 /// the boxes of two halves of 4 leaves (`treelet_dp.wgsl`).

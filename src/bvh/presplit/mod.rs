@@ -2,13 +2,14 @@
 //! become several references (clipped boxes of the same triangle) before the LBVH build, within a
 //! budget of β·N extra references. Stages: triangle boxes → scene box (reduction) → split
 //! priorities (`triangles_priority.wgsl`) → split counts under the budget by a 16-ary search
-//! (`splits_budget.wgsl`) → reference offsets (exclusive scan) → recursive splitting at Morton-grid
+//! (`splits_count.wgsl` per step, then `splits_assign.wgsl`) → reference offsets (exclusive scan) → recursive splitting at Morton-grid
 //! planes (`triangles_split.wgsl`). The reference count stays on the GPU: the LBVH stages after
 //! it are sized for N + β·N references and read the count (`gpu::ItemCount`). CPU twin:
 //! `presplit_cpu`.
 
 mod cpu;
-mod splits_budget;
+mod splits_assign;
+mod splits_count;
 mod triangles_priority;
 mod triangles_split;
 
@@ -16,11 +17,12 @@ pub use cpu::{
     budget_scale, presplit_cpu, split_importance, split_priority, split_triangle, splits_at,
     SplitGrid,
 };
-pub use splits_budget::{SPLITS_COUNT, SPLITS_WRITE_COUNTS};
+pub use splits_assign::SPLITS_ASSIGN;
+pub use splits_count::SPLITS_COUNT;
 pub use triangles_priority::TRIANGLES_PRIORITY;
 pub use triangles_split::TRIANGLES_SPLIT;
 
-use splits_budget::BudgetParams;
+use splits_count::BudgetParams;
 
 use super::lbvh::{CentroidsReduce, TrianglesBounds};
 use crate::device::Geometry;
@@ -62,7 +64,7 @@ pub struct PreSplitter {
     scene_bounds: CentroidsReduce,
     priority: Kernel<Items>,
     count_splits: Kernel<BudgetParams>,
-    write_counts: Kernel<BudgetParams>,
+    assign_splits: Kernel<BudgetParams>,
     split: Kernel<Items>,
     scan: PrefixScan,
     scratch: Option<Scratch>,
@@ -76,7 +78,7 @@ impl PreSplitter {
             scene_bounds: CentroidsReduce::new(ctx),
             priority: Kernel::new(ctx, &TRIANGLES_PRIORITY),
             count_splits: Kernel::new(ctx, &SPLITS_COUNT),
-            write_counts: Kernel::new(ctx, &SPLITS_WRITE_COUNTS),
+            assign_splits: Kernel::new(ctx, &SPLITS_ASSIGN),
             split: Kernel::new(ctx, &TRIANGLES_SPLIT),
             scan: PrefixScan::new(ctx),
             scratch: None,
@@ -170,7 +172,7 @@ impl PreSplitter {
                 budget_params.step = step;
                 pass.dispatch(&self.count_splits, grid, &budget_params, &budget_buffers);
             }
-            pass.dispatch(&self.write_counts, grid, &budget_params, &budget_buffers);
+            pass.dispatch(&self.assign_splits, grid, &budget_params, &budget_buffers);
             self.scan
                 .record_block_local(&mut pass, &s.ref_offsets, n, 1)?;
         }
