@@ -2,12 +2,18 @@
 // finds the closest hit, or any hit (for shadow rays: stops at the first leaf hit), with the
 // watertight triangle test. The including kernel declares the storage arrays `nodes`,
 // `prim_indices` and `triangles`, and passes a zero from a uniform (`opaque_zero`, see
-// ray_triangle.wgsl). CPU twin: `Bvh::closest_hit` / `Bvh::any_hit` (src/bvh/traverse.rs).
+// ray_triangle.wgsl) and its stack (see `TraversalStack`). CPU twin: `Bvh::closest_hit` /
+// `Bvh::any_hit` (src/bvh/traverse.rs).
 #include "bvh_node.wgsl"
 #include "ray_triangle.wgsl"
 #include "ray_box.wgsl"
 
-fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_zero: u32, any_hit: bool) -> TraceResult {
+// The subtrees still to visit: (node, bits of its entry distance) per entry. The caller declares
+// it once per invocation and passes it to every `traverse`: WGSL zero-fills every variable, so a
+// stack declared in `traverse` would be cleared on every call (512 bytes of private memory).
+alias TraversalStack = array<vec2<u32>, STACK_SIZE>;
+
+fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_zero: u32, any_hit: bool, stack: ptr<function, TraversalStack>) -> TraceResult {
     var best = Hit(t_max, MISS, 0.0, 0.0);
     let test = ray_triangle_test(origin, dir, opaque_zero);
     var overflow = 0u;
@@ -16,8 +22,6 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_ze
     if box_entry(root.min, root.max, boxes, t_min, best.t) == NO_ENTRY {
         return TraceResult(best, 0u);
     }
-    var stack: array<u32, STACK_SIZE>;
-    var stack_entry: array<f32, STACK_SIZE>;
     var sp = 0u;
     var index = 0u;
     loop {
@@ -46,8 +50,7 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_ze
                     far_t = tl;
                 }
                 if sp < STACK_SIZE {
-                    stack[sp] = far;
-                    stack_entry[sp] = far_t;
+                    (*stack)[sp] = vec2<u32>(far, bitcast<u32>(far_t));
                     sp++;
                 } else {
                     overflow = 1u;
@@ -68,8 +71,9 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_ze
             var found = false;
             while sp > 0u {
                 sp--;
-                if stack_entry[sp] <= best.t * BOX_EXIT_SLACK {
-                    index = stack[sp];
+                let entry = (*stack)[sp];
+                if bitcast<f32>(entry.y) <= best.t * BOX_EXIT_SLACK {
+                    index = entry.x;
                     found = true;
                     break;
                 }

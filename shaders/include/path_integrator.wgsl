@@ -10,13 +10,13 @@
 // shadow, is counted (workgroup reduction, then one global atomic per workgroup).
 #include "random.wgsl"
 
-fn trace_closest(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_zero: u32) -> TraceResult {
-    return traverse(origin, dir, t_min, t_max, opaque_zero, false);
+fn trace_closest(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_zero: u32, stack: ptr<function, TraversalStack>) -> TraceResult {
+    return traverse(origin, dir, t_min, t_max, opaque_zero, false, stack);
 }
 
 // Some hit in [t_min, t_max] (not necessarily the closest), or MISS.
-fn trace_any(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_zero: u32) -> TraceResult {
-    return traverse(origin, dir, t_min, t_max, opaque_zero, true);
+fn trace_any(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_zero: u32, stack: ptr<function, TraversalStack>) -> TraceResult {
+    return traverse(origin, dir, t_min, t_max, opaque_zero, true, stack);
 }
 
 struct TraceParams {
@@ -76,6 +76,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
     workgroupBarrier();
     var rays = 0u;
     var overflows = 0u;
+    // One traversal stack for all of this invocation's rays (zero-filled once).
+    var stack: TraversalStack;
     if gid.x < params.width && gid.y < params.height {
         let pixel = gid.y * params.width + gid.x;
         var rng = pcg_hash(pixel ^ pcg_hash(params.seed));
@@ -91,7 +93,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
             var throughput = vec3<f32>(1.0);
             var radiance = vec3<f32>(0.0);
             for (var depth = 0u; depth < params.max_depth; depth++) {
-                let traced = trace_closest(origin, dir, 0.0, 3.0e38, params.opaque_zero);
+                let traced = trace_closest(origin, dir, 0.0, 3.0e38, params.opaque_zero, &stack);
                 rays++;
                 overflows += traced.overflow;
                 let hit = traced.hit;
@@ -116,7 +118,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
                     let distance = length(to_light);
                     let cos_theta = dot(n, to_light) / max(distance, 1e-30);
                     if cos_theta > 0.0 {
-                        let shadow = trace_any(origin, to_light / distance, 0.0, distance, params.opaque_zero);
+                        let shadow = trace_any(origin, to_light / distance, 0.0, distance, params.opaque_zero, &stack);
                         rays++;
                         overflows += shadow.overflow;
                         if shadow.hit.tri == MISS {

@@ -19,7 +19,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let ray = rays[i];
-    let result = traverse(ray.origin, ray.dir, ray.t_min, ray.t_max, params.opaque_zero, params.any_hit != 0u);
+    var stack: TraversalStack;
+    let result = traverse(ray.origin, ray.dir, ray.t_min, ray.t_max, params.opaque_zero, params.any_hit != 0u, &stack);
     if result.overflow != 0u {
         atomicAdd(&counters[0], 1u);
     }

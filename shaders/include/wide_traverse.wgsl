@@ -11,7 +11,8 @@
 // whose next child lies beyond the closest hit is dropped. The paper visits the internal children
 // in octant order too; sorted, rays test far fewer triangles (README, "Traversal"). The including
 // kernel declares `wide_nodes`, `prim_indices` and `triangles`, and passes a zero from a uniform
-// (`opaque_zero`). CPU twin of the layout: `WideBvh` (src/bvh/wide/node.rs).
+// (`opaque_zero`) and its stack (see `TraversalStack`). CPU twin of the layout: `WideBvh`
+// (src/bvh/wide/node.rs).
 #include "wide_node.wgsl"
 #include "ray_triangle.wgsl"
 #include "ray_box.wgsl"
@@ -107,7 +108,12 @@ fn slab_test(near: vec3<u32>, far: vec3<u32>, scale: vec3<f32>, near_offset: vec
     return SlabHits(enter, bits.x | bits.y | bits.z | bits.w);
 }
 
-fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_zero: u32, any_hit: bool) -> TraceResult {
+// The node groups still to visit. The caller declares it once per invocation and passes it to
+// every `traverse`: WGSL zero-fills every variable, so a stack declared in `traverse` would be
+// cleared on every call (768 bytes of private memory).
+alias TraversalStack = array<vec3<u32>, STACK_SIZE>;
+
+fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_zero: u32, any_hit: bool, stack: ptr<function, TraversalStack>) -> TraceResult {
     var best = Hit(t_max, MISS, 0.0, 0.0);
     let test = ray_triangle_test(origin, dir, opaque_zero);
     let boxes = box_ray(origin, dir);
@@ -115,7 +121,6 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_ze
     let near_is_lo = boxes.inv_dir >= vec3<f32>(0.0);
     let octant_flip = 7u ^ (select(0u, 1u, dir.x < 0.0) | select(0u, 2u, dir.y < 0.0) | select(0u, 4u, dir.z < 0.0));
     var overflow = 0u;
-    var stack: array<vec3<u32>, STACK_SIZE>;
     var sp = 0u;
     var index = 0u;
     loop {
@@ -180,8 +185,9 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_ze
             var found = false;
             while sp > 0u {
                 sp--;
-                if bitcast<f32>(stack[sp].z) <= best.t * BOX_EXIT_SLACK {
-                    group = stack[sp];
+                let popped = (*stack)[sp];
+                if bitcast<f32>(popped.z) <= best.t * BOX_EXIT_SLACK {
+                    group = popped;
                     found = true;
                     break;
                 }
@@ -194,7 +200,7 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_ze
         let left = (group.y >> 24u) - 1u;
         if left != 0u {
             if sp < STACK_SIZE {
-                stack[sp] = vec3<u32>(group.x, ((group.y & 0xffffffu) >> 3u) | (left << 24u), group.z);
+                (*stack)[sp] = vec3<u32>(group.x, ((group.y & 0xffffffu) >> 3u) | (left << 24u), group.z);
                 sp++;
             } else {
                 overflow = 1u;
