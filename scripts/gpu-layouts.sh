@@ -1,0 +1,51 @@
+#!/usr/bin/env bash
+# The binary-vs-wide trace table and the per-stage build times on a lent GPU, in one `device` call.
+# Here, first:   bash ../shared/gpu/pack.sh
+# Then `run` with carry [".gpu", ".gl"] and the command:   bash scripts/gpu-layouts.sh
+# (`bash .gpu/run.sh tests bench` is the other call: the test binaries and the standard table.)
+# Every scene below is built by lbvh, trbvh and trbvh-split and each tree traced in both layouts,
+# 1920x1080, 4 spp, after 0.5 s of warm-up, median of 21. JSON lines go to $OUT/layouts.jsonl, a
+# table is printed last. SCENES overrides the scene list, W H SPP REPEATS the workload; with
+# TREELET set to a treelet binary it runs that one here instead (a dry run, e.g. on lavapipe:
+# TREELET=target/release/treelet SCENES=cornell W=64 H=64 SPP=1 REPEATS=1 bash scripts/gpu-layouts.sh).
+set -u
+out=${OUT:-/tmp/out}
+mkdir -p "$out"
+bin=${TREELET:-}
+if [ -z "$bin" ]; then
+  # run.sh unpacks the binary and the scenes into /tmp/treelet-gpu and checks that the GPU opens.
+  bash .gpu/run.sh -- scenes > "$out/scenes.txt" 2>&1 || { cat "$out/scenes.txt"; exit 1; }
+  work=/tmp/treelet-gpu
+  bin=$work/treelet
+  [ -x "$bin" ] || { echo "no $bin: .gpu/run.sh unpacks elsewhere now"; exit 1; }
+  export TREELET_SCENES_DIR=$work/scenes
+  icd=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
+  [ -f $icd ] && export VK_DRIVER_FILES=$icd
+fi
+: > "$out/layouts.jsonl"
+for s in ${SCENES:-conference crytek_sponza sibenik lost_empire armadillo dabrovic_sponza field:707}; do
+  timeout 150 "$bin" bench --scene "$s" --builder lbvh,trbvh,trbvh-split --layout binary,wide \
+    --width "${W:-1920}" --height "${H:-1080}" --spp "${SPP:-4}" --repeats "${REPEATS:-21}" >> "$out/layouts.jsonl" 2>> "$out/layouts.log" \
+    || echo "$s: exit $? (see layouts.log)"
+done
+python3 - "$out/layouts.jsonl" <<'PY'
+import json, sys
+rows = [json.loads(l) for l in open(sys.argv[1]) if l.startswith("{")]
+runs = {}
+for r in rows:
+    runs.setdefault((r["scene"], r["builder"]), {})[r["layout"]] = r
+print("scene            builder      build ms  wide ms  disp  binary Mrays/s  wide Mrays/s  wide/binary  bytes w/b")
+for (scene, builder), l in runs.items():
+    b, w = l.get("binary"), l.get("wide")
+    if not (b and w):
+        continue
+    ratio = (w["mrays_per_s"] or 0) / (b["mrays_per_s"] or 1)
+    print(f"{scene[-16:]:16} {builder:11} {b['build_ms']:9.2f} {w['stages_ms'].get('wide') or 0:8.2f}"
+          f" {b['dispatches']:5} {b['mrays_per_s'] or 0:15.1f} {w['mrays_per_s'] or 0:13.1f}"
+          f" {ratio:12.2f} {w['tree_bytes'] / b['tree_bytes']:10.2f}")
+print("per-stage build ms (binary runs):")
+for (scene, builder), l in runs.items():
+    if "binary" in l:
+        stages = " ".join(f"{k} {v:.2f}" for k, v in l["binary"]["stages_ms"].items() if v is not None)
+        print(f"  {scene[-16:]:16} {builder:11} {stages}")
+PY
