@@ -51,7 +51,7 @@ impl WideConverter {
         let ctx = rec.ctx;
         let binary_nodes = (tree.nodes.size() / std::mem::size_of::<BvhNode>() as u64) as u32;
         let prims = (tree.prim_indices.size() / 4) as u32;
-        // A binary tree in n nodes has at most (n + 1) / 2 leaves.
+        // The tree in a buffer of n binary nodes has at most (n + 1) / 2 leaves.
         let capacity = max_wide_nodes(binary_nodes.div_ceil(2));
         let level_dispatches = self
             .forced_level_dispatches
