@@ -3,22 +3,11 @@
 // Hillis-Steele scan of the 256 invocation totals in workgroup memory) and writes the block's total
 // to sums[block]. The caller scans `sums` the same way (the next level, its own dispatch) and adds
 // it back with counts_add.wgsl; a length of at most SCAN_BLOCK needs this one dispatch only.
-// `columns` arrays of `len` elements stored back to back are scanned independently: workgroup
-// c * num_blocks + b scans block b of column c and writes its total to sums[c * num_blocks + b]
-// (the next level's column c). Workgroups are linear indices over a 1D or 2D grid:
-// wid.x + wid.y * num_workgroups.x.
-#include "constants.wgsl"
+// Every column of `data` is scanned on its own (scan_blocks.wgsl).
+#include "scan_blocks.wgsl"
 
 const WORKGROUP: u32 = 256u;
 const ITEMS: u32 = SCAN_BLOCK / WORKGROUP;
-
-struct ScanParams {
-    // Elements and blocks per column.
-    len: u32,
-    num_blocks: u32,
-    columns: u32,
-    pad: u32,
-}
 
 @group(0) @binding(0) var<uniform> params: ScanParams;
 @group(0) @binding(1) var<storage, read_write> data: array<u32>;
@@ -46,17 +35,14 @@ fn main(
     @builtin(workgroup_id) wid: vec3<u32>,
     @builtin(num_workgroups) nwg: vec3<u32>,
 ) {
-    let id = wid.x + wid.y * nwg.x;
-    if id >= params.num_blocks * params.columns {
+    let b = scan_block(wid, nwg);
+    if !b.exists {
         return;
     }
-    let column = id / params.num_blocks;
-    let block = id - column * params.num_blocks;
-    let start = column * params.len;
-    let base = block * SCAN_BLOCK + lid * ITEMS;
+    let base = b.first + lid * ITEMS;
     var total = 0u;
     for (var i = 0u; i < ITEMS; i++) {
-        total += load(start, base + i);
+        total += load(b.start, base + i);
     }
     partial[lid] = total;
     workgroupBarrier();
@@ -71,11 +57,11 @@ fn main(
     }
     var before = partial[lid] - total;
     for (var i = 0u; i < ITEMS; i++) {
-        let x = load(start, base + i);
-        store(start, base + i, before);
+        let x = load(b.start, base + i);
+        store(b.start, base + i, before);
         before += x;
     }
     if lid == WORKGROUP - 1u {
-        sums[id] = partial[lid];
+        sums[b.id] = partial[lid];
     }
 }

@@ -184,38 +184,28 @@ fn wide_hits_equal_brute_force() {
     }
 }
 
-/// A balanced binary tree over `triangles` (a power of two of them), one reference per leaf:
-/// sorted by centroid x and halved.
+/// A balanced binary tree over `triangles` (a power of two of them) in their order, one reference
+/// per leaf.
 fn balanced_tree(triangles: &[Triangle]) -> Bvh {
-    fn add(
-        nodes: &mut Vec<BvhNode>,
-        triangles: &[Triangle],
-        order: &[u32],
-        first: u32,
-        count: u32,
-    ) {
-        let range = &order[first as usize..(first + count) as usize];
-        let bounds = range
+    fn add(nodes: &mut Vec<BvhNode>, triangles: &[Triangle], first: u32, count: u32) {
+        let bounds = triangles[first as usize..(first + count) as usize]
             .iter()
-            .fold(Aabb::EMPTY, |b, &t| b.union(triangles[t as usize].bounds()));
+            .fold(Aabb::EMPTY, |b, t| b.union(t.bounds()));
         let index = nodes.len();
         nodes.push(BvhNode::leaf(bounds, first, 1));
         if count > 1 {
             let left = nodes.len() as u32;
-            add(nodes, triangles, order, first, count / 2);
+            add(nodes, triangles, first, count / 2);
             let right = nodes.len() as u32;
-            add(nodes, triangles, order, first + count / 2, count / 2);
+            add(nodes, triangles, first + count / 2, count / 2);
             nodes[index] = BvhNode::internal(bounds, left, right);
         }
     }
-    let mut order: Vec<u32> = (0..triangles.len() as u32).collect();
-    let x = |t: u32| triangles[t as usize].bounds().centroid().x;
-    order.sort_by(|&a, &b| x(a).total_cmp(&x(b)));
     let mut nodes = Vec::new();
-    add(&mut nodes, triangles, &order, 0, triangles.len() as u32);
+    add(&mut nodes, triangles, 0, triangles.len() as u32);
     Bvh {
         nodes,
-        prim_indices: order,
+        prim_indices: (0..triangles.len() as u32).collect(),
     }
 }
 

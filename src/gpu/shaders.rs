@@ -38,6 +38,10 @@ const INCLUDES: &[(&str, &str)] = &[
         include_str!("../../shaders/include/split_grid.wgsl"),
     ),
     (
+        "scan_blocks.wgsl",
+        include_str!("../../shaders/include/scan_blocks.wgsl"),
+    ),
+    (
         "splits_search.wgsl",
         include_str!("../../shaders/include/splits_search.wgsl"),
     ),

@@ -14,7 +14,7 @@ use crate::gpu::constants::SCAN_BLOCK;
 use crate::gpu::{storage_buffer_zeroed, GpuContext, Grid, Kernel, Pass};
 use crate::{Error, Result};
 
-/// Parameters of one scan level (counts_scan.wgsl, counts_add.wgsl).
+/// Parameters of one scan level (WGSL twin in `shaders/include/scan_blocks.wgsl`).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 pub struct ScanParams {
