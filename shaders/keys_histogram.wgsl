@@ -1,7 +1,9 @@
-// Radix-sort histogram, step 1 of each LSD pass of `sort::RadixSort` (reduce-then-scan): each
+// Radix-sort histogram of the first LSD pass of `sort::RadixSort` (reduce-then-scan): each
 // workgroup counts the 4-bit digits at `params.shift` (only the low `params.bits` of them) of its
 // tile of SORT_TILE keys and writes the 16 counts digit-major, counts[digit * num_tiles + tile], from
-// which keys_scatter.wgsl sums every (digit, tile)'s first output position.
+// which keys_scatter.wgsl sums every (digit, tile)'s first output position. Later passes take their
+// counts from the scatter before them, which adds them into `next_counts`: this kernel zeroes the
+// tile's 16 words there for the first scatter.
 // Counting without atomics: each invocation counts its keys (strided, coalesced loads) into 16
 // byte-wide counters packed in a vec4 (a one-hot add per key, all vector ALU), widens them to
 // 16-bit halves in workgroup memory, and a raking reduction sums the 256 invocations (2 barriers).
@@ -11,8 +13,9 @@
 
 @group(0) @binding(1) var<storage, read> keys: array<vec2<u32>>;
 @group(0) @binding(2) var<storage, read_write> counts: array<u32>;
+@group(0) @binding(3) var<storage, read_write> next_counts: array<u32>;
 // The item count's limit (`gpu::ItemCount`): the sort orders the first `sort_count()` pairs.
-@group(0) @binding(3) var<storage, read> count_limit: array<u32>;
+@group(0) @binding(4) var<storage, read> count_limit: array<u32>;
 
 #include "radix_digits.wgsl"
 
@@ -51,5 +54,6 @@ fn main(
             total += segments[(lid >> 1u) * 32u + j];
         }
         counts[lid * params.num_tiles + tile] = (total >> ((lid & 1u) * 16u)) & 0xffffu;
+        next_counts[lid * params.num_tiles + tile] = 0u;
     }
 }

@@ -1,12 +1,15 @@
-// Radix-sort stable scatter, step 2 of each LSD pass of `sort::RadixSort` (reduce-then-scan): each
+// Radix-sort stable scatter, one dispatch per LSD pass of `sort::RadixSort` (reduce-then-scan): each
 // workgroup ranks its tile of SORT_TILE (key, value) pairs stably by the 4-bit digit at `params.shift`
-// (low `params.bits` bits) and writes each pair to offset(digit, tile) + rank.
+// (low `params.bits` bits) and writes each pair to offset(digit, tile) + rank. On the way it counts
+// the next pass's digits per tile of its output, so that no pass but the first needs a histogram
+// dispatch.
 //
 // The offsets without a scan pass: offset(d, t) = Σ_{d' < d} total(d') + Σ_{t' < t} count(d', t')
-// over the keys_histogram.wgsl counts. Each workgroup sums the 16 × num_tiles counts itself
-// (invocation lid adds digit lid / 16's counts of every 16th tile from lid % 16; then 16 sums per
-// digit, then the 16 digit totals): 16 · num_tiles reads per workgroup, a few kilobytes that stay
-// in cache, in place of a scan dispatch (or three) per pass.
+// over the pass's digit counts `counts` (keys_histogram.wgsl for the first pass, the scatter before
+// for the others). Each workgroup sums the 16 × num_tiles counts itself (invocation lid adds digit
+// lid / 16's counts of every 16th tile from lid % 16; then 16 sums per digit, then the 16 digit
+// totals): 16 · num_tiles reads per workgroup, a few kilobytes that stay in cache, in place of a
+// scan dispatch (or three) per pass.
 //
 // Stable ranking by per-invocation counting (the radix sort of Zagha & Blelloch 1991 for vector
 // multiprocessors, one "processor" per invocation): invocation i owns the contiguous pairs
@@ -16,7 +19,15 @@
 // segments of 8 invocations, then the 32 segment sums; 3 barriers in all); (3) it walks its pairs
 // again and writes each to offset(digit, tile) + prefix(digit, invocation) + the count of that digit
 // earlier in its own run. Ranks follow (invocation, position) = element order, hence stable.
-// 9 KiB of workgroup memory; no subgroup operations.
+//
+// The next pass's counts (when `params.next_bits` > 0): the pairs of digit d go to the consecutive
+// slots from offset(d, tile), at most SORT_TILE of them, so into at most two output tiles. The
+// workgroup counts each pair's next digit per (d, which of the two tiles) in workgroup memory, then
+// adds the non-zero counts to `next_counts[next digit * num_tiles + output tile]` (device atomics:
+// at most 512 per workgroup). The buffers rotate over three passes: the scatter reads `counts`,
+// adds into `next_counts`, which the dispatch before zeroed, and zeroes its tile's words of
+// `cleared_counts`, into which the scatter after it adds.
+// 11 KiB of workgroup memory; no subgroup operations.
 // Tiles are linear workgroup indices over a 1D or 2D grid: wid.x + wid.y * num_workgroups.x.
 // Tile geometry, parameters and digit counting are shared with keys_histogram.wgsl
 // (radix_digits.wgsl).
@@ -26,8 +37,10 @@
 @group(0) @binding(3) var<storage, read> counts: array<u32>;
 @group(0) @binding(4) var<storage, read_write> keys_out: array<vec2<u32>>;
 @group(0) @binding(5) var<storage, read_write> values_out: array<u32>;
+@group(0) @binding(6) var<storage, read_write> next_counts: array<atomic<u32>>;
+@group(0) @binding(7) var<storage, read_write> cleared_counts: array<u32>;
 // The item count's limit (`gpu::ItemCount`): the sort orders the first `sort_count()` pairs.
-@group(0) @binding(6) var<storage, read> count_limit: array<u32>;
+@group(0) @binding(8) var<storage, read> count_limit: array<u32>;
 
 #include "radix_digits.wgsl"
 
@@ -38,6 +51,9 @@ fn pick(v: vec4<u32>, i: u32) -> u32 {
 
 // First output position of each digit's pairs of this tile (`tile_offsets`).
 var<workgroup> tile_offsets: array<u32, 16>;
+// [digit d][the first or second output tile of d's pairs][next digit]: pairs of this tile
+// (zero-initialized, as all workgroup memory).
+var<workgroup> next_digit_counts: array<atomic<u32>, 512>;
 
 // Fills `tile_offsets`: offset(d, tile) from the counts of all tiles (see the header). Uses
 // `digit_counts` as scratch; ends with a barrier.
@@ -92,6 +108,10 @@ fn main(
     if tile >= params.num_tiles {
         return;
     }
+    let gather_next = params.next_bits != 0u;
+    if gather_next && lid < 16u {
+        cleared_counts[lid * params.num_tiles + tile] = 0u;
+    }
     compute_tile_offsets(lid, tile);
     let first = tile * SORT_TILE + lid * ITEMS;
     let n = sort_count();
@@ -142,6 +162,21 @@ fn main(
             seen += one_hot(d);
             keys_out[dest] = key;
             values_out[dest] = values_in[item];
+            if gather_next {
+                let second_tile = dest / SORT_TILE - tile_offsets[d] / SORT_TILE;
+                let next = digit_at(key, params.next_shift, params.next_bits);
+                atomicAdd(&next_digit_counts[(d * 2u + second_tile) * 16u + next], 1u);
+            }
+        }
+    }
+    if gather_next {
+        workgroupBarrier();
+        for (var i = lid; i < 512u; i += WORKGROUP) {
+            let count = atomicLoad(&next_digit_counts[i]);
+            if count != 0u {
+                let output_tile = tile_offsets[i >> 5u] / SORT_TILE + ((i >> 4u) & 1u);
+                atomicAdd(&next_counts[(i & 15u) * params.num_tiles + output_tile], count);
+            }
         }
     }
 }

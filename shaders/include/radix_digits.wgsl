@@ -1,5 +1,5 @@
-// Shared by keys_histogram.wgsl and keys_scatter.wgsl (one LSD pass of `sort::RadixSort`): the
-// tile geometry, the pass parameters (binding 0) and the pair count, the 4-bit digit of a key and
+// Shared by keys_histogram.wgsl and keys_scatter.wgsl (the LSD passes of `sort::RadixSort`): the
+// tile geometry, the pass parameters (binding 0) and the pair count, the 4-bit digits of a key and
 // the packed per-invocation digit counters. SortParams must match src/sort/radix_sort.rs.
 
 const WORKGROUP: u32 = 256u;
@@ -7,11 +7,15 @@ const ITEMS: u32 = 32u; // keys per invocation, at most 255 (byte-wide counters)
 #include "constants.wgsl"
 // SORT_TILE = WORKGROUP * ITEMS keys per workgroup, below 2^16 (16-bit counters).
 
+// The pass's digit: `bits` bits from bit `shift`; the next pass's digit, whose counts the pass
+// gathers: `next_bits` (0 after the last pass) bits from `next_shift`.
 struct SortParams {
     n: u32,
     num_tiles: u32,
     shift: u32,
     bits: u32,
+    next_shift: u32,
+    next_bits: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: SortParams;
@@ -29,11 +33,16 @@ var<workgroup> digit_counts: array<u32, 2048>;
 // invocations.
 var<workgroup> segments: array<u32, 256>;
 
-// The digit of a 64-bit key (x = low word, y = high word); shifts are multiples of 4, so a digit
-// never straddles the two words.
+// The `bits` bits from bit `shift` of a 64-bit key (x = low word, y = high word); shifts are
+// multiples of 4, so a digit never straddles the two words.
+fn digit_at(key: vec2<u32>, shift: u32, bits: u32) -> u32 {
+    let word = select(key.x, key.y, shift >= 32u);
+    return (word >> (shift & 31u)) & ((1u << bits) - 1u);
+}
+
+// The pass's digit of a key.
 fn digit_of(key: vec2<u32>) -> u32 {
-    let word = select(key.x, key.y, params.shift >= 32u);
-    return (word >> (params.shift & 31u)) & ((1u << params.bits) - 1u);
+    return digit_at(key, params.shift, params.bits);
 }
 
 // One in byte (d % 4) of component d / 4: adding it counts digit d in 16 byte-wide counters.
