@@ -1,7 +1,8 @@
 // Treelet round, step 2: the treelet roots of levels 1 ..= level_dispatches + 1 (counted by
 // nodes_level.wgsl) into one array ordered by level (`roots`: level L's roots start after those of
 // the levels below; their order within a level is free, as a level's treelets are disjoint), and
-// the indirect dispatch arguments of each level's treelets_optimize dispatch (invocation 0). One
+// the indirect dispatch arguments of each level's treelets_optimize dispatch (invocation 0: a
+// workgroup per treelet below params.team_below treelets, else per 32 treelets). One
 // invocation per internal node; also zeroes the node's arrival counter for treelets_climb.
 #include "treelet_round.wgsl"
 
@@ -24,7 +25,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let n = min(params.count, count_limit[0]);
     if j == 0u {
         for (var level = 1u; level <= params.level_dispatches; level++) {
-            let groups = (atomicLoad(&schedule[level - 1u]) + OPTIMIZE_WORKGROUP - 1u) / OPTIMIZE_WORKGROUP;
+            // A workgroup per treelet when teams optimize the level, else per OPTIMIZE_WORKGROUP.
+            let size = atomicLoad(&schedule[level - 1u]);
+            let groups = select((size + OPTIMIZE_WORKGROUP - 1u) / OPTIMIZE_WORKGROUP, size, size < params.team_below);
             let y = (groups + MAX_WORKGROUPS_X - 1u) / MAX_WORKGROUPS_X;
             let at = SCHEDULE_ARGS + 3u * (level - 1u);
             atomicStore(&schedule[at], select(0u, (groups + y - 1u) / max(y, 1u), y > 0u));

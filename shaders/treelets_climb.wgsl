@@ -1,15 +1,21 @@
 // Treelet round, step 4: the levels above level_dispatches, in one workgroup (a few treelets per
 // level near the top of a tree: one dispatch each would mostly cost dispatch overhead). It starts
 // from the roots of level level_dispatches + 1 (bucketed by roots_bucket.wgsl) and climbs: after
-// each wave of treelets (one per invocation, treelet_dp.wgsl; more waves when a level has more
-// roots than the workgroup has invocations) a root's parent joins the next wave once its other
-// child is done: at once when that child was processed before this kernel (level <=
-// level_dispatches) or is no root, else at the second arrival. Works for trees of any height.
+// each wave of treelets a root's parent joins the next wave once its other child is done: at once
+// when that child was processed before this kernel (level <= level_dispatches) or is no root,
+// else at the second arrival. Works for trees of any height. A wave of fewer than
+// min(params.team_below, TEAM_WAVE) treelets is optimized by the workgroup's TEAMS teams of 32
+// invocations, a treelet per team at a time (treelet_team.wgsl: the waves near the top hold one
+// to a few treelets); a larger wave one treelet per invocation (treelet_dp.wgsl).
 // Node data is only shared within the workgroup: storageBarriers order it.
 #include "bvh_node.wgsl"
 #include "treelet_round.wgsl"
 
 const WORKGROUP: u32 = 128u;
+const TEAMS: u32 = 4u;
+// From this many treelets on, a wave takes longer by teams (a treelet per team at a time) than
+// with a treelet per invocation.
+const TEAM_WAVE: u32 = 32u;
 
 @group(0) @binding(0) var<uniform> params: RoundParams;
 @group(0) @binding(1) var<storage, read_write> nodes: array<BvhNode>;
@@ -18,13 +24,16 @@ const WORKGROUP: u32 = 128u;
 @group(0) @binding(4) var<storage, read_write> costs: array<f32>;
 @group(0) @binding(5) var<storage, read> schedule: array<u32>;
 @group(0) @binding(6) var<storage, read> roots: array<u32>;
-@group(0) @binding(7) var<storage, read> levels: array<u32>;
+// `treelet::subsets_by_size`.
+@group(0) @binding(7) var<storage, read> subset_order: array<u32>;
+@group(0) @binding(8) var<storage, read> levels: array<u32>;
 // Arrival counters of the internal nodes, zeroed by roots_bucket.wgsl.
-@group(0) @binding(8) var<storage, read_write> arrivals: array<atomic<u32>>;
+@group(0) @binding(9) var<storage, read_write> arrivals: array<atomic<u32>>;
 // Two halves of `half` entries each: the current wave and the next.
-@group(0) @binding(9) var<storage, read_write> waves: array<u32>;
+@group(0) @binding(10) var<storage, read_write> waves: array<u32>;
 
 #include "treelet_dp.wgsl"
+#include "treelet_team.wgsl"
 
 var<workgroup> wave_size: u32;
 var<workgroup> next_size: atomic<u32>;
@@ -53,8 +62,17 @@ fn main(@builtin(local_invocation_index) lid: u32) {
         }
         let wave = current * half;
         let next = (1u - current) * half;
-        for (var i = lid; i < size; i += WORKGROUP) {
-            optimize_treelet(waves[wave + i]);
+        if size < min(params.team_below, TEAM_WAVE) {
+            let team = lid / TEAM_LANES;
+            for (var done = 0u; done < size; done += TEAMS) {
+                let i = done + team;
+                let has_treelet = i < size;
+                optimize_treelet_team(select(0u, waves[wave + min(i, size - 1u)], has_treelet), has_treelet, team, lid % TEAM_LANES);
+            }
+        } else {
+            for (var i = lid; i < size; i += WORKGROUP) {
+                optimize_treelet(waves[wave + i]);
+            }
         }
         if lid == 0u {
             atomicStore(&next_size, 0u);

@@ -1,11 +1,13 @@
 // Treelet round, step 3: the treelets of one level (params.level <= level_dispatches), bucketed by
-// roots_bucket.wgsl, one invocation each (treelet_dp.wgsl). Dispatched indirectly with the
-// level's workgroup count; the dispatches of the levels below have finished, so node data is read
-// with plain loads.
+// roots_bucket.wgsl. Dispatched indirectly with the level's workgroup count: a level of at least
+// params.team_below treelets gives each an invocation (treelet_dp.wgsl), 32 per workgroup; a
+// smaller level gives each a workgroup, whose 32 invocations share its DP (treelet_team.wgsl). The
+// dispatches of the levels below have finished, so node data is read with plain loads.
 #include "bvh_node.wgsl"
 #include "treelet_round.wgsl"
 
 const WORKGROUP: u32 = 32u;
+const TEAMS: u32 = 1u;
 
 @group(0) @binding(0) var<uniform> params: RoundParams;
 @group(0) @binding(1) var<storage, read_write> nodes: array<BvhNode>;
@@ -14,20 +16,36 @@ const WORKGROUP: u32 = 32u;
 @group(0) @binding(4) var<storage, read_write> costs: array<f32>;
 @group(0) @binding(5) var<storage, read> schedule: array<u32>;
 @group(0) @binding(6) var<storage, read> roots: array<u32>;
+// `treelet::subsets_by_size`.
+@group(0) @binding(7) var<storage, read> subset_order: array<u32>;
 
 #include "treelet_dp.wgsl"
+#include "treelet_team.wgsl"
+
+var<workgroup> level_size: u32;
 
 @compute @workgroup_size(WORKGROUP)
 fn main(
-    @builtin(global_invocation_id) gid: vec3<u32>,
+    @builtin(local_invocation_index) lid: u32,
+    @builtin(workgroup_id) wid: vec3<u32>,
     @builtin(num_workgroups) groups: vec3<u32>,
 ) {
-    let i = gid.x + gid.y * groups.x * WORKGROUP;
     var first = 0u;
     for (var below = 1u; below < params.level; below++) {
         first += schedule[below - 1u];
     }
-    if i < schedule[params.level - 1u] {
-        optimize_treelet(roots[first + i]);
+    if lid == 0u {
+        level_size = schedule[params.level - 1u];
+    }
+    let size = workgroupUniformLoad(&level_size);
+    let group = wid.x + wid.y * groups.x;
+    if size < params.team_below {
+        let has_treelet = group < size;
+        optimize_treelet_team(select(0u, roots[first + min(group, size - 1u)], has_treelet), has_treelet, 0u, lid);
+    } else {
+        let i = group * WORKGROUP + lid;
+        if i < size {
+            optimize_treelet(roots[first + i]);
+        }
     }
 }

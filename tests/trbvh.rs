@@ -11,8 +11,8 @@ use glam::Vec3;
 use rand::Rng;
 use treelet::bvh::lbvh::{build_lbvh_from_boxes_cpu, prim_boxes_cpu, TRBVH_KEY_BITS};
 use treelet::bvh::treelet::{
-    build_trbvh_cpu, optimize_lbvh_cpu, solve_treelet, surface_area, CostModel, TrbvhBuilder,
-    TreeletLeaf, TreeletSettings, WorkingTree, MAX_LEVEL_DISPATCHES,
+    build_trbvh_cpu, optimize_lbvh_cpu, solve_treelet, subsets_by_size, surface_area, CostModel,
+    TrbvhBuilder, TreeletLeaf, TreeletSettings, WorkingTree, MAX_LEVEL_DISPATCHES,
 };
 use treelet::bvh::{sah_cost, validate, Bvh, SahParams};
 use treelet::device::{Geometry, Tree};
@@ -380,6 +380,70 @@ fn every_level_schedule_agrees_with_the_cpu_twin() {
             TreeletSettings::HIGH_QUALITY,
         );
     }
+}
+
+/// The teams' subset table: every subset of 8 leaves once, by size; within a size the subsets of
+/// the first m leaves come first (a team of an m-leaf treelet reads only those).
+#[test]
+fn subsets_by_size_puts_each_treelet_size_first() {
+    let order = subsets_by_size();
+    let mut seen = order.clone();
+    seen.sort_unstable();
+    assert_eq!(seen, (0..256).collect::<Vec<u32>>());
+    assert!(order
+        .windows(2)
+        .all(|w| w[0].count_ones() <= w[1].count_ones()));
+    for k in 0..=8u32 {
+        let of_size: Vec<u32> = order
+            .iter()
+            .copied()
+            .filter(|s| s.count_ones() == k)
+            .collect();
+        for m in k..=8 {
+            let fits = of_size.iter().take_while(|&&s| s < 1 << m).count();
+            let count = of_size.iter().filter(|&&s| s < 1 << m).count();
+            assert_eq!(fits, count, "size {k}, {m} leaves");
+        }
+    }
+}
+
+/// Teams of invocations (a level's treelets each optimized by a workgroup) and lone invocations
+/// (a treelet each) build the same tree: every treelet size (3-8: subsets of one size in one or
+/// several turns of the team, one to 32 lanes per subset), dispatched and climbed levels, against
+/// each other exactly (the same operations from the same inputs) and against the CPU twin.
+#[test]
+fn teams_and_lone_invocations_build_the_same_tree() {
+    let builder =
+        &mut TrbvhBuilder::new(gpu(), TreeletSettings::BALANCED, SahParams::default()).unwrap();
+    let scene = scene_of(random_soup(3000, 45));
+    let geometry = Geometry::upload(gpu(), &scene).unwrap();
+    for treelet_size in 3..=8 {
+        let settings = TreeletSettings {
+            treelet_size,
+            rounds: 2,
+            split_percent: 0,
+        };
+        builder.settings = settings;
+        for levels in [None, Some(0)] {
+            builder.set_level_dispatches(levels);
+            let mut trees = Vec::new();
+            for below in [0, u32::MAX] {
+                builder.set_team_below(Some(below));
+                trees.push(builder.build_stages(gpu(), &geometry).unwrap());
+            }
+            assert!(
+                trees[0].working == trees[1].working,
+                "treelet size {treelet_size}, level dispatches {levels:?}: teams and lone \
+                 invocations differ"
+            );
+            let model = CostModel::from(&builder.sah);
+            let cpu = optimize_lbvh_cpu(trees[1].lbvh.clone(), &settings, &model);
+            assert_optimizer_agrees(&trees[1].working, &cpu, &builder.sah);
+        }
+    }
+    builder.set_team_below(None);
+    builder.set_level_dispatches(None);
+    check_gpu_against_cpu(builder, random_soup(3000, 46), TreeletSettings::BALANCED);
 }
 
 /// The agreement checks hold for a device that fuses every Ci·A + children (as GPU compilers may):

@@ -26,7 +26,9 @@ struct RoundParams {
     // 1 after the first round: counts and costs are still those of the tree (the treelet kernels
     // rewrite both consistently), so nodes_level only gives the roots of the new gamma levels.
     levels_only: u32,
-    pad0: u32,
+    // A level of fewer treelets is optimized by teams of invocations, a treelet per team
+    // (treelets_optimize.wgsl, treelets_climb.wgsl).
+    team_below: u32,
 }
 
 // The schedule buffer (u32 words): per level L = 1 ..= MAX_LEVEL_DISPATCHES + 1, the number of

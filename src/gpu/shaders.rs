@@ -89,6 +89,10 @@ const INCLUDES: &[(&str, &str)] = &[
         "treelet_dp.wgsl",
         include_str!("../../shaders/include/treelet_dp.wgsl"),
     ),
+    (
+        "treelet_team.wgsl",
+        include_str!("../../shaders/include/treelet_team.wgsl"),
+    ),
 ];
 
 /// `source` with its includes expanded (each file once); `constants.wgsl` is generated from

@@ -56,6 +56,15 @@ pub fn surface_area(lo: Vec3, hi: Vec3) -> f32 {
     2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
 }
 
+/// The 256 subsets of 8 treelet leaves ordered by size, then value: the order in which a team of
+/// invocations processes them (`shaders/include/treelet_team.wgsl`, which binds this table). The
+/// subsets of size k of the first m leaves are the first C(m, k) entries of size k.
+pub fn subsets_by_size() -> Vec<u32> {
+    let mut subsets: Vec<u32> = (0..1 << MAX_TREELET_SIZE).collect();
+    subsets.sort_by_key(|s| (s.count_ones(), *s));
+    subsets
+}
+
 /// One treelet leaf: its box, subtree cost and primitive count.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TreeletLeaf {

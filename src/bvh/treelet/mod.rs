@@ -19,7 +19,9 @@ mod treelets_climb;
 mod treelets_optimize;
 
 pub use cpu::WorkingTree;
-pub use dp::{solve_treelet, surface_area, CostModel, TreeletLeaf, TreeletSolution};
+pub use dp::{
+    solve_treelet, subsets_by_size, surface_area, CostModel, TreeletLeaf, TreeletSolution,
+};
 pub use nodes_compact::NODES_COMPACT;
 pub use nodes_level::NODES_LEVEL;
 pub use nodes_mark::NODES_MARK;
@@ -263,7 +265,7 @@ impl TrbvhBuilder {
         Ok(Self {
             lbvh: LbvhBuilder::new(ctx).with_key_bits(TRBVH_KEY_BITS)?,
             presplit: None,
-            rounds: TreeletRounds::new(ctx),
+            rounds: TreeletRounds::new(ctx)?,
             collapse: Collapse::new(ctx)?,
             scratch: None,
             last_capacity: 0,
@@ -279,6 +281,14 @@ impl TrbvhBuilder {
     /// tree (tests check 0, 1 and the most).
     pub fn set_level_dispatches(&mut self, levels: Option<u32>) {
         self.rounds.forced_level_dispatches = levels;
+    }
+
+    /// Levels (and climbed waves) of fewer treelets than `below` are optimized by teams of 32
+    /// invocations, the others one treelet per invocation; the trees are the same. None: the
+    /// device's default (4096 on GPUs, 0 on CPU devices). 0 never uses teams; u32::MAX uses
+    /// them for every level and for every climbed wave of fewer than 32 treelets (tests, tuning).
+    pub fn set_team_below(&mut self, below: Option<u32>) {
+        self.rounds.forced_team_below = below;
     }
 
     /// Timestamped passes one build records.

@@ -1,22 +1,30 @@
 //! GPU treelet restructuring rounds (Karras & Aila 2013, §3-4), processed level by level. A round
 //! schedules the tree (kernel `nodes_level`: counts, costs and each treelet root's level, a
 //! bottom-up climb), buckets the roots by level (`roots_bucket`), optimizes each of the lowest
-//! levels in one indirect dispatch, one treelet per invocation (`treelets_optimize`), and climbs
-//! the remaining top levels in one workgroup (`treelets_climb`). Roots of one level are disjoint
-//! subtrees, and every level is processed after the levels below it, so the result is the one of
-//! the paper's bottom-up traversal: the CPU twin `WorkingTree::optimize_round` processes the nodes
-//! in post-order. Dispatch boundaries order memory, so the treelet kernels read and write node data
-//! with plain loads and stores, not atomics.
+//! levels in one indirect dispatch (`treelets_optimize`), and climbs the remaining top levels in
+//! one workgroup (`treelets_climb`). Roots of one level are disjoint subtrees, and every level is
+//! processed after the levels below it, so the result is the one of the paper's bottom-up
+//! traversal: the CPU twin `WorkingTree::optimize_round` processes the nodes in post-order.
+//! Dispatch boundaries order memory, so the treelet kernels read and write node data with plain
+//! loads and stores, not atomics.
+//!
+//! Who optimizes a treelet: a level (or a climbed wave) of many treelets gives each its own
+//! invocation, which runs the whole DP alone (throughput); a level of fewer than `team_below`
+//! treelets gives each a team of 32 invocations that runs the DP's subsets of one size side by
+//! side, as the paper does with a warp (latency: the levels near the top of a tree hold a few
+//! treelets each, and a tree has 20-40 levels per round, each waiting for the one before). Both
+//! find the same topology (same operations, same tie-breaking).
 
 use bytemuck::{Pod, Zeroable};
 
-use super::dp::CostModel;
+use super::dp::{subsets_by_size, CostModel};
 use super::nodes_level::NODES_LEVEL;
 use super::roots_bucket::ROOTS_BUCKET;
 use super::treelets_climb::TREELETS_CLIMB;
 use super::treelets_optimize::TREELETS_OPTIMIZE;
 use crate::gpu::constants::MAX_LEVEL_DISPATCHES;
-use crate::gpu::{Grid, ItemCount, Kernel, Pass};
+use crate::gpu::{storage_buffer, Grid, ItemCount, Kernel, Pass};
+use crate::Result;
 
 /// Parameters of every kernel of a round (WGSL twin in `shaders/include/treelet_round.wgsl`).
 #[repr(C)]
@@ -34,7 +42,8 @@ pub struct RoundParams {
     level_dispatches: u32,
     level: u32,
     levels_only: u32,
-    _pad: u32,
+    /// Levels of fewer treelets are optimized by teams (see the module header).
+    team_below: u32,
 }
 const _: () = assert!(std::mem::size_of::<RoundParams>() == 48);
 
@@ -82,25 +91,48 @@ pub(crate) fn level_dispatches(n: u32, gamma: u32) -> u32 {
     (wide.ilog2() + 2).min(MAX_LEVEL_DISPATCHES)
 }
 
+/// The level size below which teams optimize the treelets on a device. On a GPU a lone
+/// invocation's DP is a chain of ~1000 dependent partition tests that a level of few treelets
+/// cannot hide, while a team of 32 (one warp) syncs almost for free: 4096 is an estimate of where
+/// a team's ~7x more instructions per treelet start to cost more than its ~10x shorter chain
+/// saves (not yet measured). On a CPU device (lavapipe) invocations are SIMD lanes and every
+/// barrier switches between them: teams cost ~17x more per treelet there (measured on field:224:
+/// treelet stage 205 ms never, 228 ms below 64, 3.6 s always), so never.
+fn default_team_below(device: wgpu::DeviceType) -> u32 {
+    match device {
+        wgpu::DeviceType::Cpu => 0,
+        _ => 4096,
+    }
+}
+
 /// The kernels of a round.
 pub(crate) struct TreeletRounds {
     level: Kernel<RoundParams>,
     bucket: Kernel<RoundParams>,
     optimize: Kernel<RoundParams>,
     climb: Kernel<RoundParams>,
+    /// `subsets_by_size`, read by the teams.
+    subsets: wgpu::Buffer,
     /// Levels dispatched per round; None: `level_dispatches` (tests force other values).
     pub forced_level_dispatches: Option<u32>,
+    /// Levels of fewer treelets are optimized by teams: the device's default ...
+    default_team_below: u32,
+    /// ... or this (tests and tuning force other values).
+    pub forced_team_below: Option<u32>,
 }
 
 impl TreeletRounds {
-    pub fn new(ctx: &crate::gpu::GpuContext) -> Self {
-        Self {
+    pub fn new(ctx: &crate::gpu::GpuContext) -> Result<Self> {
+        Ok(Self {
             level: Kernel::new(ctx, &NODES_LEVEL),
             bucket: Kernel::new(ctx, &ROOTS_BUCKET),
             optimize: Kernel::new(ctx, &TREELETS_OPTIMIZE),
             climb: Kernel::new(ctx, &TREELETS_CLIMB),
+            subsets: storage_buffer(ctx, "treelet subsets by size", &subsets_by_size())?,
             forced_level_dispatches: None,
-        }
+            default_team_below: default_team_below(ctx.info.device_type),
+            forced_team_below: None,
+        })
     }
 
     /// Records one round over a working tree of `count` leaves (LBVH layout) whose arrival
@@ -132,7 +164,7 @@ impl TreeletRounds {
             level_dispatches: dispatched,
             level: 0,
             levels_only: u32::from(round.levels_only),
-            _pad: 0,
+            team_below: self.forced_team_below.unwrap_or(self.default_team_below),
         };
         let limit = count.limit(ctx);
         pass.dispatch(
@@ -173,6 +205,7 @@ impl TreeletRounds {
             state.costs,
             state.schedule,
             state.roots,
+            &self.subsets,
         ];
         for level in 1..=dispatched {
             params.level = level;

@@ -1,0 +1,266 @@
+// One treelet's restructuring by a team of TEAM_LANES invocations (Karras & Aila 2013, §4: "we
+// process the subsets of one size in parallel"), for levels of few treelets, where one invocation
+// per treelet (treelet_dp.wgsl) leaves the device idle while each runs its ~1000 partition tests
+// alone. The same four steps, with the same operations and tie-breaking, so the same topology:
+//   1. lane 0: the root's cost and the formation (treelet_dp.wgsl's order; a leaf's area is
+//      computed once);
+//   2. lanes 0-15 and 16-31: the half tables' 16 entries each, straight from their leaves;
+//   3. the DP by subset size k = 2 ..= m: the C(m, k) subsets of size k (the table
+//      `subset_order`, `treelet::subsets_by_size`) side by side. When there are fewer subsets than
+//      lanes, each subset gets L lanes (a power of two) that take its partitions in turns, then
+//      reduce to the least cost, ties to the smallest P: P grows with the enumeration order, so
+//      this is the partition the serial search keeps. Costs and best partitions live in workgroup
+//      memory; a barrier separates sizes;
+//   4. lane 0: the write-back, taking each internal subset's partition from the DP instead of
+//      searching it again.
+// The including kernel declares TEAMS (teams per workgroup), `subset_order` and what
+// treelet_dp.wgsl needs, and includes treelet_dp.wgsl first. `optimize_treelet_team` contains
+// barriers: every invocation of the workgroup calls it, teams without a treelet with
+// `has_treelet = false`.
+
+const TEAM_LANES: u32 = 32u;
+// Subsets of up to MAX_TREELET leaves, indexed by their bits.
+const TEAM_SUBSETS: u32 = 1u << MAX_TREELET;
+
+var<workgroup> team_leaf_node: array<u32, TEAMS * MAX_TREELET>;
+var<workgroup> team_internal_node: array<u32, TEAMS * MAX_TREELET>;
+var<workgroup> team_low_min: array<vec3<f32>, TEAMS * 16u>;
+var<workgroup> team_low_max: array<vec3<f32>, TEAMS * 16u>;
+var<workgroup> team_low_prims: array<u32, TEAMS * 16u>;
+var<workgroup> team_high_min: array<vec3<f32>, TEAMS * 16u>;
+var<workgroup> team_high_max: array<vec3<f32>, TEAMS * 16u>;
+var<workgroup> team_high_prims: array<u32, TEAMS * 16u>;
+// c(S) and the best partition of S (internal subsets), per team.
+var<workgroup> team_cost: array<f32, TEAMS * TEAM_SUBSETS>;
+var<workgroup> team_split: array<u32, TEAMS * TEAM_SUBSETS>;
+// Each lane's best (cost, P) during a reduction.
+var<workgroup> team_best_cost: array<f32, TEAMS * TEAM_LANES>;
+var<workgroup> team_best_split: array<u32, TEAMS * TEAM_LANES>;
+// The root's cost before restructuring.
+var<workgroup> team_current: array<f32, TEAMS>;
+
+// C(n, k) for n <= 8 (exact: each step's product is divisible).
+fn binomial(n: u32, k: u32) -> u32 {
+    var c = 1u;
+    for (var j = 0u; j < k; j++) {
+        c = c * (n - j) / (j + 1u);
+    }
+    return c;
+}
+
+// First entry of the subsets of size k in `subset_order`.
+fn subsets_of_size(k: u32) -> u32 {
+    var first = 0u;
+    for (var j = 0u; j < k; j++) {
+        first += binomial(MAX_TREELET, j);
+    }
+    return first;
+}
+
+fn team_subset_min(base: u32, s: u32) -> vec3<f32> {
+    return min(team_low_min[base + (s & 15u)], team_high_min[base + (s >> 4u)]);
+}
+
+fn team_subset_max(base: u32, s: u32) -> vec3<f32> {
+    return max(team_low_max[base + (s & 15u)], team_high_max[base + (s >> 4u)]);
+}
+
+fn team_subset_prims(base: u32, s: u32) -> u32 {
+    return team_low_prims[base + (s & 15u)] + team_high_prims[base + (s >> 4u)];
+}
+
+// Step 1 (lane 0): the root's cost and the treelet's leaves and internal nodes.
+fn team_form(root: u32, team: u32) {
+    let leaves = team * MAX_TREELET;
+    let left = nodes[root].left_or_first;
+    let right = nodes[root].right_or_count;
+    let current = combine_cost(node_area(root), prim_counts[root], costs[left] + costs[right]);
+    costs[root] = current;
+    team_current[team] = current;
+    // Area of each leaf that is an internal node, -1 for a tree leaf (never expanded).
+    var area: array<f32, MAX_TREELET>;
+    team_leaf_node[leaves] = left;
+    team_leaf_node[leaves + 1u] = right;
+    area[0] = select(node_area(left), -1.0, is_leaf_node(left));
+    area[1] = select(node_area(right), -1.0, is_leaf_node(right));
+    team_internal_node[leaves] = root;
+    for (var count = 2u; count < params.treelet_size; count++) {
+        var best = 0u;
+        var best_area = -1.0;
+        for (var i = 0u; i < count; i++) {
+            if area[i] > best_area {
+                best_area = area[i];
+                best = i;
+            }
+        }
+        let expanded = team_leaf_node[leaves + best];
+        let l = nodes[expanded].left_or_first;
+        let r = nodes[expanded].right_or_count;
+        team_leaf_node[leaves + best] = l;
+        team_leaf_node[leaves + count] = r;
+        area[best] = select(node_area(l), -1.0, is_leaf_node(l));
+        area[count] = select(node_area(r), -1.0, is_leaf_node(r));
+        team_internal_node[leaves + count - 1u] = expanded;
+    }
+}
+
+// Step 4 (lane 0): the new topology, breadth-first as in treelet_dp.wgsl's write_back.
+fn team_write_back(root: u32, team: u32, full_split: u32, full_cost: f32) {
+    let leaves = team * MAX_TREELET;
+    let subsets = team * TEAM_SUBSETS;
+    let halves = team * 16u;
+    let full = (1u << params.treelet_size) - 1u;
+    var queue_set: array<u32, MAX_TREELET>;
+    var queue_node: array<u32, MAX_TREELET>;
+    queue_set[0] = full;
+    queue_node[0] = root;
+    var queued = 1u;
+    for (var head = 0u; head < queued; head++) {
+        let s = queue_set[head];
+        let node = queue_node[head];
+        var split = full_split;
+        var cost = full_cost;
+        if s != full {
+            split = team_split[subsets + s];
+            cost = team_cost[subsets + s];
+        }
+        let parts = array<u32, 2>(split, s ^ split);
+        var child = array<u32, 2>(0u, 0u);
+        for (var k = 0u; k < 2u; k++) {
+            let part = parts[k];
+            if countOneBits(part) == 1u {
+                child[k] = team_leaf_node[leaves + firstTrailingBit(part)];
+            } else {
+                child[k] = team_internal_node[leaves + queued];
+                queue_set[queued] = part;
+                queue_node[queued] = child[k];
+                queued++;
+            }
+            parents[child[k]] = node;
+        }
+        nodes[node] = BvhNode(team_subset_min(halves, s), child[0], team_subset_max(halves, s), child[1]);
+        prim_counts[node] = team_subset_prims(halves, s);
+        costs[node] = cost;
+    }
+}
+
+// Steps 1-4 for the treelet rooted at `root`, by the invocation in lane `lane` of team `team`.
+fn optimize_treelet_team(root: u32, has_treelet: bool, team: u32, lane: u32) {
+    let m = params.treelet_size;
+    let leaves = team * MAX_TREELET;
+    let subsets = team * TEAM_SUBSETS;
+    let halves = team * 16u;
+    let lanes = team * TEAM_LANES;
+    if has_treelet && lane == 0u {
+        team_form(root, team);
+    }
+    workgroupBarrier();
+    // Step 2: entry t of the low (lanes 0-15) or high (lanes 16-31) half table; and the leaves'
+    // costs, the DP's subsets of size 1.
+    let t = lane & 15u;
+    let first_leaf = select(0u, 4u, lane >= 16u);
+    var box_min = vec3<f32>(F32_MAX);
+    var box_max = vec3<f32>(-F32_MAX);
+    var prims = 0u;
+    // Highest leaf first: the order in which build_half_tables unites them (the same box, also
+    // in the sign of a zero).
+    for (var b = 3u; b < 4u; b--) {
+        let i = first_leaf + b;
+        if has_treelet && (t & (1u << b)) != 0u && i < m {
+            let node = team_leaf_node[leaves + i];
+            box_min = min(box_min, nodes[node].min);
+            box_max = max(box_max, nodes[node].max);
+            prims += prim_counts[node];
+        }
+    }
+    if lane < 16u {
+        team_low_min[halves + t] = box_min;
+        team_low_max[halves + t] = box_max;
+        team_low_prims[halves + t] = prims;
+    } else {
+        team_high_min[halves + t] = box_min;
+        team_high_max[halves + t] = box_max;
+        team_high_prims[halves + t] = prims;
+    }
+    if has_treelet && lane < m {
+        team_cost[subsets + (1u << lane)] = costs[team_leaf_node[leaves + lane]];
+    }
+    workgroupBarrier();
+    // Step 3.
+    var full_split = 0u;
+    var full_best = F32_MAX;
+    for (var k = 2u; k <= m; k++) {
+        let count = binomial(m, k);
+        // Lanes per subset: the largest power of two with count * L <= TEAM_LANES, at least 1.
+        let per_subset = 1u << firstLeadingBit(max(TEAM_LANES / count, 1u));
+        let side_by_side = TEAM_LANES / per_subset;
+        let group = lane / per_subset;
+        let turn = lane % per_subset;
+        let first = subsets_of_size(k);
+        for (var done = 0u; done < count; done += side_by_side) {
+            let index = done + group;
+            let valid = has_treelet && index < count;
+            var best = F32_MAX;
+            var best_p = 0u;
+            var s = 0u;
+            if valid {
+                s = subset_order[first + index];
+                // P over the non-empty subsets of S without its lowest bit, in increasing order
+                // (treelet_dp.wgsl's best_partition); this lane takes every per_subset-th.
+                let delta = (s - 1u) & s;
+                var p = (0u - delta) & s;
+                var rank = 0u;
+                loop {
+                    if rank % per_subset == turn {
+                        let c = team_cost[subsets + p] + team_cost[subsets + (s ^ p)];
+                        if c < best {
+                            best = c;
+                            best_p = p;
+                        }
+                    }
+                    rank++;
+                    p = (p - delta) & s;
+                    if p == 0u {
+                        break;
+                    }
+                }
+            }
+            team_best_cost[lanes + lane] = best;
+            team_best_split[lanes + lane] = best_p;
+            workgroupBarrier();
+            for (var half = per_subset >> 1u; half > 0u; half >>= 1u) {
+                if turn < half {
+                    let other_cost = team_best_cost[lanes + lane + half];
+                    let other_p = team_best_split[lanes + lane + half];
+                    if other_cost < best || (other_cost == best && other_p < best_p) {
+                        best = other_cost;
+                        best_p = other_p;
+                        team_best_cost[lanes + lane] = best;
+                        team_best_split[lanes + lane] = best_p;
+                    }
+                }
+                workgroupBarrier();
+            }
+            if valid && turn == 0u {
+                if k < m {
+                    let area = surface_area(team_subset_min(halves, s), team_subset_max(halves, s), params.zero);
+                    team_cost[subsets + s] = combine_cost(area, team_subset_prims(halves, s), best);
+                    team_split[subsets + s] = best_p;
+                } else {
+                    full_split = best_p;
+                    full_best = best;
+                }
+            }
+            workgroupBarrier();
+        }
+    }
+    // Step 4: lane 0 holds the full set's partition (its only subset of size m).
+    if has_treelet && lane == 0u {
+        let full = (1u << m) - 1u;
+        let full_area = surface_area(team_subset_min(halves, full), team_subset_max(halves, full), params.zero);
+        let full_cost = combine_cost(full_area, team_subset_prims(halves, full), full_best);
+        if full_cost < team_current[team] {
+            team_write_back(root, team, full_split, full_cost);
+        }
+    }
+}
