@@ -1,8 +1,10 @@
 //! The SAH-optimal topology of one treelet by dynamic programming over all subsets of its leaves
 //! (Karras & Aila 2013, §4, Algorithm 2), CPU side: used by the CPU twin of the GPU optimizer and
 //! checked against brute-force enumeration in tests. Operation order and tie-breaking match
-//! `shaders/include/treelet_dp.wgsl`; areas agree bit for bit (the kernels keep their products
-//! unfused), costs to a few ulps (the kernels may fuse Ci·A into the following add).
+//! `shaders/include/treelet_dp.wgsl` (one invocation per treelet) and
+//! `shaders/include/treelet_team.wgsl` (a team per treelet); areas agree bit for bit (the kernels
+//! keep their products unfused), costs to a few ulps (the kernels may fuse Ci·A into the
+//! following add).
 
 use glam::Vec3;
 
