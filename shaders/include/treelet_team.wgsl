@@ -36,8 +36,6 @@ var<workgroup> team_split: array<u32, TEAMS * TEAM_SUBSETS>;
 // Each lane's best (cost, P) during a reduction.
 var<workgroup> team_best_cost: array<f32, TEAMS * TEAM_LANES>;
 var<workgroup> team_best_split: array<u32, TEAMS * TEAM_LANES>;
-// The root's cost before restructuring.
-var<workgroup> team_current: array<f32, TEAMS>;
 
 // C(n, k) for n <= 8 (exact: each step's product is divisible).
 fn binomial(n: u32, k: u32) -> u32 {
@@ -69,14 +67,13 @@ fn team_subset_prims(base: u32, s: u32) -> u32 {
     return team_low_prims[base + (s & 15u)] + team_high_prims[base + (s >> 4u)];
 }
 
-// Step 1 (lane 0): the root's cost and the treelet's leaves and internal nodes.
-fn team_form(root: u32, team: u32) {
+// Step 1 (lane 0): the treelet's leaves and internal nodes; returns the root's cost.
+fn team_form(root: u32, team: u32) -> f32 {
     let leaves = team * MAX_TREELET;
     let left = nodes[root].left_or_first;
     let right = nodes[root].right_or_count;
     let current = combine_cost(node_area(root), prim_counts[root], costs[left] + costs[right]);
     costs[root] = current;
-    team_current[team] = current;
     // Area of each leaf that is an internal node, -1 for a tree leaf (never expanded).
     var area: array<f32, MAX_TREELET>;
     team_leaf_node[leaves] = left;
@@ -102,6 +99,7 @@ fn team_form(root: u32, team: u32) {
         area[count] = select(node_area(r), -1.0, is_leaf_node(r));
         team_internal_node[leaves + count - 1u] = expanded;
     }
+    return current;
 }
 
 // Step 4 (lane 0): the new topology, breadth-first as in treelet_dp.wgsl's write_back.
@@ -151,8 +149,10 @@ fn optimize_treelet_team(root: u32, has_treelet: bool, team: u32, lane: u32) {
     let subsets = team * TEAM_SUBSETS;
     let halves = team * 16u;
     let lanes = team * TEAM_LANES;
+    // Lane 0's: the root's cost before restructuring.
+    var current = 0.0;
     if has_treelet && lane == 0u {
-        team_form(root, team);
+        current = team_form(root, team);
     }
     workgroupBarrier();
     // Step 2: entry t of the low (lanes 0-15) or high (lanes 16-31) half table; and the leaves'
@@ -259,7 +259,7 @@ fn optimize_treelet_team(root: u32, has_treelet: bool, team: u32, lane: u32) {
         let full = (1u << m) - 1u;
         let full_area = surface_area(team_subset_min(halves, full), team_subset_max(halves, full), params.zero);
         let full_cost = combine_cost(full_area, team_subset_prims(halves, full), full_best);
-        if full_cost < team_current[team] {
+        if full_cost < current {
             team_write_back(root, team, full_split, full_cost);
         }
     }

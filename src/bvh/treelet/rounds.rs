@@ -115,9 +115,8 @@ pub(crate) struct TreeletRounds {
     subsets: wgpu::Buffer,
     /// Levels dispatched per round; None: `level_dispatches` (tests force other values).
     pub forced_level_dispatches: Option<u32>,
-    /// Levels of fewer treelets are optimized by teams: the device's default ...
-    default_team_below: u32,
-    /// ... or this (tests and tuning force other values).
+    /// Levels of fewer treelets are optimized by teams; None: `default_team_below` (tests and
+    /// tuning force other values).
     pub forced_team_below: Option<u32>,
 }
 
@@ -130,7 +129,6 @@ impl TreeletRounds {
             climb: Kernel::new(ctx, &TREELETS_CLIMB),
             subsets: storage_buffer(ctx, "treelet subsets by size", &subsets_by_size())?,
             forced_level_dispatches: None,
-            default_team_below: default_team_below(ctx.info.device_type),
             forced_team_below: None,
         })
     }
@@ -164,7 +162,9 @@ impl TreeletRounds {
             level_dispatches: dispatched,
             level: 0,
             levels_only: u32::from(round.levels_only),
-            team_below: self.forced_team_below.unwrap_or(self.default_team_below),
+            team_below: self
+                .forced_team_below
+                .unwrap_or_else(|| default_team_below(ctx.info.device_type)),
         };
         let limit = count.limit(ctx);
         pass.dispatch(
