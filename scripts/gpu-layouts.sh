@@ -9,19 +9,7 @@
 # TREELET set to a treelet binary it runs that one here instead (a dry run, e.g. on lavapipe:
 # TREELET=target/release/treelet SCENES=cornell W=64 H=64 SPP=1 REPEATS=1 bash scripts/gpu-layouts.sh).
 set -u
-out=${OUT:-/tmp/out}
-mkdir -p "$out"
-bin=${TREELET:-}
-if [ -z "$bin" ]; then
-  # run.sh unpacks the binary and the scenes into /tmp/treelet-gpu and checks that the GPU opens.
-  bash .gpu/run.sh -- scenes > "$out/scenes.txt" 2>&1 || { cat "$out/scenes.txt"; exit 1; }
-  work=/tmp/treelet-gpu
-  bin=$work/treelet
-  [ -x "$bin" ] || { echo "no $bin: .gpu/run.sh unpacks elsewhere now"; exit 1; }
-  export TREELET_SCENES_DIR=$work/scenes
-  icd=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
-  [ -f $icd ] && export VK_DRIVER_FILES=$icd
-fi
+. scripts/gpu-env.sh
 : > "$out/layouts.jsonl"
 for s in ${SCENES:-conference crytek_sponza sibenik lost_empire armadillo dabrovic_sponza field:707}; do
   timeout 150 "$bin" bench --scene "$s" --builder lbvh,trbvh,trbvh-split --layout binary,wide \

@@ -146,6 +146,67 @@ fn bench_prints_json_lines() {
     assert!(gpu_warmup["ms"].as_f64().unwrap() >= 50.0, "{gpu_warmup}");
 }
 
+/// `bench --level-dispatches ... --team-below ...` measures trbvh once per combination (lbvh once)
+/// and reports each schedule; every schedule builds the same tree.
+#[test]
+fn bench_compares_round_schedules_on_the_same_tree() {
+    let result = treelet(&[
+        "bench",
+        "--scene",
+        "field-10k",
+        "--builder",
+        "lbvh,trbvh",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--spp",
+        "1",
+        "--repeats",
+        "1",
+        "--warmup-ms",
+        "0",
+        "--level-dispatches",
+        "0,3",
+        "--team-below",
+        "0,4096",
+    ]);
+    assert!(
+        result.status.success(),
+        "{}",
+        String::from_utf8_lossy(&result.stderr)
+    );
+    let stdout = String::from_utf8(result.stdout).unwrap();
+    let records: Vec<serde_json::Value> = stdout
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let schedule = |r: &serde_json::Value| {
+        (
+            r["builder"].as_str().unwrap().to_owned(),
+            r["level_dispatches"].as_u64(),
+            r["team_below"].as_u64(),
+        )
+    };
+    let runs: Vec<_> = records.iter().map(schedule).collect();
+    let trbvh = |d, t| ("trbvh".to_owned(), Some(d), Some(t));
+    assert_eq!(
+        runs,
+        [
+            ("lbvh".to_owned(), None, None),
+            trbvh(0, 0),
+            trbvh(0, 4096),
+            trbvh(3, 0),
+            trbvh(3, 4096),
+        ]
+    );
+    for record in &records[2..] {
+        assert_eq!(record["valid"], true);
+        assert_eq!(record["sah"], records[1]["sah"], "{record}");
+        assert_eq!(record["nodes"], records[1]["nodes"], "{record}");
+    }
+}
+
 /// A fresh temporary path named `stem` with `extension`.
 fn temp_path(stem: &str, extension: &str) -> std::path::PathBuf {
     std::env::temp_dir().join(format!(
@@ -253,6 +314,10 @@ fn options_of_other_builders_are_refused() {
     assert_clean_failure(
         &["render", "--builder", "lbvh", "--preset", "fast"],
         "--preset does not apply",
+    );
+    assert_clean_failure(
+        &["bench", "--builder", "lbvh", "--team-below", "64"],
+        "--level-dispatches and --team-below apply only to trbvh and trbvh-split",
     );
     assert_clean_failure(
         &["bench", "--builder", "trbvh", "--split-budget", "0.3"],

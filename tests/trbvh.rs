@@ -12,7 +12,7 @@ use rand::Rng;
 use treelet::bvh::lbvh::{build_lbvh_from_boxes_cpu, prim_boxes_cpu, TRBVH_KEY_BITS};
 use treelet::bvh::treelet::{
     build_trbvh_cpu, optimize_lbvh_cpu, solve_treelet, subsets_by_size, surface_area, CostModel,
-    TrbvhBuilder, TreeletLeaf, TreeletSettings, WorkingTree, MAX_LEVEL_DISPATCHES,
+    RoundSchedule, TrbvhBuilder, TreeletLeaf, TreeletSettings, WorkingTree, MAX_LEVEL_DISPATCHES,
 };
 use treelet::bvh::{sah_cost, validate, Bvh, SahParams};
 use treelet::device::{Geometry, Tree};
@@ -371,7 +371,10 @@ fn every_level_schedule_agrees_with_the_cpu_twin() {
     let builder =
         &mut TrbvhBuilder::new(gpu(), TreeletSettings::BALANCED, SahParams::default()).unwrap();
     for levels in [0, 1, 3, MAX_LEVEL_DISPATCHES] {
-        builder.set_level_dispatches(Some(levels));
+        builder.set_schedule(RoundSchedule {
+            level_dispatches: Some(levels),
+            team_below: None,
+        });
         println!("{levels} level dispatches");
         check_gpu_against_cpu(builder, random_soup(3000, 44), TreeletSettings::BALANCED);
         check_gpu_against_cpu(
@@ -425,10 +428,12 @@ fn teams_and_lone_invocations_build_the_same_tree() {
         };
         builder.settings = settings;
         for levels in [None, Some(0)] {
-            builder.set_level_dispatches(levels);
             let mut trees = Vec::new();
             for below in [0, u32::MAX] {
-                builder.set_team_below(Some(below));
+                builder.set_schedule(RoundSchedule {
+                    level_dispatches: levels,
+                    team_below: Some(below),
+                });
                 trees.push(builder.build_stages(gpu(), &geometry).unwrap());
             }
             assert!(
@@ -441,8 +446,7 @@ fn teams_and_lone_invocations_build_the_same_tree() {
             assert_optimizer_agrees(&trees[1].working, &cpu, &builder.sah);
         }
     }
-    builder.set_team_below(None);
-    builder.set_level_dispatches(None);
+    builder.set_schedule(RoundSchedule::default());
     check_gpu_against_cpu(builder, random_soup(3000, 46), TreeletSettings::BALANCED);
 }
 

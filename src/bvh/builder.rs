@@ -4,7 +4,7 @@
 
 use std::time::Instant;
 
-use super::treelet::TreeletSettings;
+use super::treelet::{RoundSchedule, TreeletSettings};
 use super::update::{TreeUpdater, UpdateMode};
 use super::wide::{check_leaf_sizes, Layout, WideConverter};
 use super::{build_sbvh, build_sweep_sah, Bvh, SahParams};
@@ -137,6 +137,7 @@ impl Builder {
     /// `timing.repeats` timed builds, each submitted and waited for, reporting the one with the
     /// median time; the wide layout's conversion is one of their stages ("wide"). CPU builders
     /// are timed once, and their upload is converted once on the GPU (timed as "wide").
+    /// `schedule` spreads the treelet rounds over the device (trbvh, trbvh-split).
     pub fn build(
         self,
         ctx: &GpuContext,
@@ -144,6 +145,7 @@ impl Builder {
         params: &SahParams,
         timing: &Timing,
         layout: Layout,
+        schedule: RoundSchedule,
     ) -> Result<(Geometry, Tree, BuildReport)> {
         let geometry = Geometry::upload(ctx, scene)?;
         match self {
@@ -157,6 +159,7 @@ impl Builder {
                 let mut tree = Tree::empty(ctx)?;
                 let mut updater = TreeUpdater::new(ctx, UpdateMode::Rebuild(self), params)?;
                 updater.set_layout(ctx, layout);
+                updater.set_round_schedule(schedule);
                 let passes = updater.pass_count();
                 let mut slab = ParamSlab::new(ctx);
                 let mut build_once = |timer: Option<&mut GpuTimer>| -> Result<()> {

@@ -9,7 +9,7 @@ use std::time::Instant;
 
 use super::lbvh::{LbvhBuilder, LBVH_PASSES};
 use super::nodes_refit::{derive_refit_links, NodesRefit};
-use super::treelet::{TrbvhBuilder, TreeletSettings};
+use super::treelet::{RoundSchedule, TrbvhBuilder, TreeletSettings};
 use super::wide::{Layout, WideConverter, MAX_WIDE_LEAF_SIZE};
 use super::{build_sbvh, build_sweep_sah, Builder, SahParams};
 use crate::device::{Geometry, Tree};
@@ -166,6 +166,14 @@ impl TreeUpdater {
 
     pub fn mode(&self) -> UpdateMode {
         self.mode
+    }
+
+    /// How the treelet rounds of the next builds spread their work over the device (trbvh and
+    /// trbvh-split; the tree does not depend on it).
+    pub fn set_round_schedule(&mut self, schedule: RoundSchedule) {
+        if let Producer::Trbvh(b) = &mut self.producer {
+            b.set_schedule(schedule);
+        }
     }
 
     /// SAH parameters of the next builds (treelet builders' cost model and max leaf size; CPU

@@ -10,13 +10,14 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 use serde::Serialize;
 use treelet::anim::load_still;
+use treelet::bvh::treelet::{RoundSchedule, MAX_LEVEL_DISPATCHES};
 use treelet::bvh::wide::{validate_wide, validate_wide_with_references, wide_sah_costs, Layout};
 use treelet::bvh::{
     sah_cost, validate, validate_with_references, write_bvh, write_wide_bvh, Builder,
 };
 use treelet::gpu::{aggregate_stages, GpuContext, Spread, Timing, Warmup};
 use treelet::trace::{PathTracer, TraceStats};
-use treelet::Result;
+use treelet::{Error, Result};
 
 use super::{parse_builder, TraceArgs};
 
@@ -44,6 +45,47 @@ pub struct BenchArgs {
     /// Timed builds per GPU builder and timed traces per builder (min, median and max are reported)
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
     repeats: u32,
+    /// Treelet levels per round given a dispatch of their own, the rest climbed by one workgroup
+    /// (trbvh, trbvh-split; default: from the tree's size); a comma-separated list to compare.
+    /// The tree is the same for every value
+    #[arg(long, value_delimiter = ',',
+          value_parser = clap::value_parser!(u32).range(0..=i64::from(MAX_LEVEL_DISPATCHES)))]
+    level_dispatches: Vec<u32>,
+    /// Treelet levels of fewer treelets than this are optimized by teams of 32 invocations, the
+    /// others one treelet per invocation (trbvh, trbvh-split; default: 4096 on GPUs, 0 on CPU
+    /// devices); a comma-separated list to compare. The tree is the same for every value
+    #[arg(long, value_delimiter = ',')]
+    team_below: Vec<u32>,
+}
+
+impl BenchArgs {
+    /// Every combination of the requested round schedules (the default where none is given);
+    /// fails when one is given but no builder has treelets to schedule.
+    fn schedules(&self, builders: &[Builder]) -> Result<Vec<RoundSchedule>> {
+        let given = !self.level_dispatches.is_empty() || !self.team_below.is_empty();
+        if given && !builders.iter().any(|b| b.treelet_settings().is_some()) {
+            return Err(Error::InvalidArgument(
+                "--level-dispatches and --team-below apply only to trbvh and trbvh-split".into(),
+            ));
+        }
+        let or_default = |values: &[u32]| -> Vec<Option<u32>> {
+            if values.is_empty() {
+                vec![None]
+            } else {
+                values.iter().copied().map(Some).collect()
+            }
+        };
+        let teams = or_default(&self.team_below);
+        Ok(or_default(&self.level_dispatches)
+            .into_iter()
+            .flat_map(|level_dispatches| {
+                teams.iter().map(move |&team_below| RoundSchedule {
+                    level_dispatches,
+                    team_below,
+                })
+            })
+            .collect())
+    }
 }
 
 fn parse_warmup_ms(s: &str) -> std::result::Result<f64, String> {
@@ -66,6 +108,10 @@ struct BenchRecord {
     treelet_size: Option<u32>,
     rounds: Option<u32>,
     split_budget: Option<f64>,
+    /// Treelet builders: the levels per round given a dispatch (null: from the tree's size, per
+    /// round) and the team threshold in effect.
+    level_dispatches: Option<u32>,
+    team_below: Option<u32>,
     adapter: String,
     triangles: usize,
     /// Triangle references in the leaves: the triangle count, plus the pieces of split
@@ -123,14 +169,24 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
         repeats: args.repeats,
     };
     let layouts = &args.trace.layout;
-    let runs: Vec<(Builder, Layout)> = builders
+    let schedules = args.schedules(&builders)?;
+    let runs: Vec<(Builder, RoundSchedule, Layout)> = builders
         .iter()
-        .flat_map(|&b| layouts.iter().map(move |&l| (b, l)))
+        .flat_map(|&b| {
+            let schedules = match b.treelet_settings() {
+                Some(_) => schedules.clone(),
+                None => vec![RoundSchedule::default()],
+            };
+            schedules
+                .into_iter()
+                .flat_map(move |s| layouts.iter().map(move |&l| (b, s, l)))
+        })
         .collect();
-    for &(builder, layout) in &runs {
-        let (geometry, tree, report) = builder.build(gpu, &scene, &params, &timing, layout)?;
+    for &(builder, schedule, layout) in &runs {
+        let (geometry, tree, report) =
+            builder.build(gpu, &scene, &params, &timing, layout, schedule)?;
         let bvh = tree.download(gpu)?;
-        let label = format!("{} {}", builder.label(), layout.name());
+        let label = run_label(builder, schedule, layout);
         let references = builder.duplicates_references();
         let (validation, nodes, leaves, tree_bytes) = match &tree.wide {
             None => {
@@ -202,6 +258,10 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
             split_budget: builder
                 .treelet_settings()
                 .map(|s| f64::from(s.split_percent) / 100.0),
+            level_dispatches: schedule.level_dispatches,
+            team_below: builder
+                .treelet_settings()
+                .map(|_| schedule.team_below(gpu.info.device_type)),
             adapter: gpu.adapter_description(),
             triangles: scene.triangles.len(),
             references: bvh.prim_indices.len(),
@@ -244,6 +304,19 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// A run's label in logs and export file names: the builder's, the schedule where one was given,
+/// the layout.
+fn run_label(builder: Builder, schedule: RoundSchedule, layout: Layout) -> String {
+    let mut label = builder.label();
+    if let Some(levels) = schedule.level_dispatches {
+        label += &format!(" d={levels}");
+    }
+    if let Some(below) = schedule.team_below {
+        label += &format!(" t={below}");
+    }
+    format!("{label} {}", layout.name())
 }
 
 /// The trace of median throughput (GPU time where timestamps exist, wall-clock time otherwise).

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 use treelet::anim::load_still;
+use treelet::bvh::treelet::RoundSchedule;
 use treelet::bvh::{Builder, UpdateMode};
 use treelet::gpu::{GpuContext, Timing};
 use treelet::trace::{save_png, PathTracer};
@@ -59,8 +60,14 @@ pub fn run(gpu: &GpuContext, args: &RenderArgs) -> Result<()> {
         ));
     };
     let layout = args.trace.single_layout()?;
-    let (geometry, tree, report) =
-        builder.build(gpu, &scene, &params, &Timing::quick(1), layout)?;
+    let (geometry, tree, report) = builder.build(
+        gpu,
+        &scene,
+        &params,
+        &Timing::quick(1),
+        layout,
+        RoundSchedule::default(),
+    )?;
     let nodes = match &tree.wide {
         Some(wide) => format!("{} wide nodes", wide.counts(gpu)?.0),
         None => format!("{} nodes", tree.counts(gpu)?.0),

@@ -7,6 +7,7 @@
 //! the medians (`median_of_passes`), so load that comes and goes affects all of them alike.
 
 use super::Measurement;
+use crate::bvh::treelet::RoundSchedule;
 use crate::bvh::wide::Layout;
 use crate::bvh::{sah_cost, validate, validate_with_references, Builder, SahParams};
 use crate::gpu::{GpuContext, Timing};
@@ -45,6 +46,7 @@ pub fn measure(
         &settings.sah,
         &Timing::quick(settings.repeats),
         Layout::Binary,
+        RoundSchedule::default(),
     )?;
     let bvh = tree.download(ctx)?;
     let validation = if builder.duplicates_references() {

@@ -29,6 +29,8 @@ pub use roots_bucket::ROOTS_BUCKET;
 pub use treelets_climb::TREELETS_CLIMB;
 pub use treelets_optimize::TREELETS_OPTIMIZE;
 
+pub use rounds::RoundSchedule;
+
 pub use crate::gpu::constants::{MAX_GPU_LEAF_SIZE, MAX_LEVEL_DISPATCHES, MAX_TREELET_SIZE};
 
 use collapse::{Collapse, CollapseBuffers};
@@ -276,24 +278,14 @@ impl TrbvhBuilder {
         })
     }
 
-    /// Overrides how many treelet levels each round gives a dispatch of their own (the rest are
-    /// climbed by one workgroup); None: chosen from the tree's size. Any value builds the same
-    /// tree (tests check 0, 1 and the most).
-    pub fn set_level_dispatches(&mut self, levels: Option<u32>) {
-        self.rounds.forced_level_dispatches = levels;
+    /// How the rounds spread their work over the device (the tree does not depend on it).
+    pub fn set_schedule(&mut self, schedule: RoundSchedule) {
+        self.rounds.schedule = schedule;
     }
 
-    /// Levels (and climbed waves) of fewer treelets than `below` are optimized by teams of 32
-    /// invocations, the others one treelet per invocation; the trees are the same. None: the
-    /// device's default (4096 on GPUs, 0 on CPU devices). 0 never uses teams; u32::MAX uses
-    /// them for every level and for every climbed wave of fewer than 32 treelets (tests, tuning).
-    pub fn set_team_below(&mut self, below: Option<u32>) {
-        self.rounds.forced_team_below = below;
-    }
-
-    /// Timestamped passes one build records.
+    /// Timestamped passes one build records (at most: each round two).
     pub fn pass_count(&self) -> u32 {
-        LBVH_PASSES + 3 + self.settings.gammas().len() as u32
+        LBVH_PASSES + 3 + 2 * self.settings.gammas().len() as u32
     }
 
     /// Builds `geometry`'s optimized tree into `tree` and waits; returns the stage times.
@@ -445,14 +437,13 @@ impl TrbvhBuilder {
         for (r, gamma) in self.settings.gammas().into_iter().enumerate() {
             rec.encoder().clear_buffer(&scratch.arrivals, 0, None);
             rec.encoder().clear_buffer(&scratch.schedule, 0, None);
-            let mut pass = rec.pass("treelets");
             let round = Round {
                 model,
                 treelet_size: self.settings.treelet_size,
                 gamma,
                 levels_only: r > 0,
             };
-            self.rounds.record(&mut pass, count, &state, &round);
+            self.rounds.record(rec, count, &state, &round);
         }
         let mut pass = rec.pass("collapse");
         let out = CollapseBuffers {

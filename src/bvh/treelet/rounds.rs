@@ -23,7 +23,7 @@ use super::roots_bucket::ROOTS_BUCKET;
 use super::treelets_climb::TREELETS_CLIMB;
 use super::treelets_optimize::TREELETS_OPTIMIZE;
 use crate::gpu::constants::MAX_LEVEL_DISPATCHES;
-use crate::gpu::{storage_buffer, Grid, ItemCount, Kernel, Pass};
+use crate::gpu::{storage_buffer, Grid, ItemCount, Kernel, Recorder};
 use crate::Result;
 
 /// Parameters of every kernel of a round (WGSL twin in `shaders/include/treelet_round.wgsl`).
@@ -91,6 +91,30 @@ pub(crate) fn level_dispatches(n: u32, gamma: u32) -> u32 {
     (wide.ilog2() + 2).min(MAX_LEVEL_DISPATCHES)
 }
 
+/// How the rounds spread their work over the device. Any schedule builds the same tree (tests
+/// check the extremes); the defaults are estimates for tuning on a real GPU (`treelet bench
+/// --level-dispatches ... --team-below ...`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RoundSchedule {
+    /// Treelet levels per round that get a dispatch of their own, at most
+    /// `MAX_LEVEL_DISPATCHES` (the rest are climbed by one workgroup); None: `level_dispatches`
+    /// of the tree's size and the round's γ.
+    pub level_dispatches: Option<u32>,
+    /// Levels (and climbed waves) of fewer treelets than this are optimized by teams of 32
+    /// invocations, the others one treelet per invocation; 0 never uses teams, u32::MAX uses them
+    /// for every level and every climbed wave of fewer than 32 treelets. None:
+    /// `default_team_below` of the device.
+    pub team_below: Option<u32>,
+}
+
+impl RoundSchedule {
+    /// The team threshold on a device of `device` type.
+    pub fn team_below(&self, device: wgpu::DeviceType) -> u32 {
+        self.team_below
+            .unwrap_or_else(|| default_team_below(device))
+    }
+}
+
 /// The level size below which teams optimize the treelets on a device. On a GPU a lone
 /// invocation's DP is a chain of ~1000 dependent partition tests that a level of few treelets
 /// cannot hide, while a team of 32 (one warp) syncs almost for free: 4096 is an estimate of where
@@ -113,11 +137,7 @@ pub(crate) struct TreeletRounds {
     climb: Kernel<RoundParams>,
     /// `subsets_by_size`, read by the teams.
     subsets: wgpu::Buffer,
-    /// Levels dispatched per round; None: `level_dispatches` (tests force other values).
-    pub forced_level_dispatches: Option<u32>,
-    /// Levels of fewer treelets are optimized by teams; None: `default_team_below` (tests and
-    /// tuning force other values).
-    pub forced_team_below: Option<u32>,
+    pub schedule: RoundSchedule,
 }
 
 impl TreeletRounds {
@@ -128,24 +148,27 @@ impl TreeletRounds {
             optimize: Kernel::new(ctx, &TREELETS_OPTIMIZE),
             climb: Kernel::new(ctx, &TREELETS_CLIMB),
             subsets: storage_buffer(ctx, "treelet subsets by size", &subsets_by_size())?,
-            forced_level_dispatches: None,
-            forced_team_below: None,
+            schedule: RoundSchedule::default(),
         })
     }
 
     /// Records one round over a working tree of `count` leaves (LBVH layout) whose arrival
-    /// counters and schedule are zero. `gamma = u32::MAX` only updates counts and costs.
+    /// counters and schedule are zero: the schedule and the dispatched levels in a pass
+    /// "treelets", the climb in a pass "treelets climb" (timed apart: the one is throughput, the
+    /// other a chain of small waves). `gamma = u32::MAX` only updates counts and costs.
     pub fn record(
         &self,
-        pass: &mut Pass<'_>,
+        rec: &mut Recorder<'_>,
         count: ItemCount<'_>,
         state: &TreeletState<'_>,
         round: &Round,
     ) {
-        let ctx = pass.ctx();
+        let ctx = rec.ctx;
+        let mut pass = rec.pass("treelets");
         let n = count.capacity();
         let dispatched = self
-            .forced_level_dispatches
+            .schedule
+            .level_dispatches
             .unwrap_or_else(|| level_dispatches(n, round.gamma))
             .min(MAX_LEVEL_DISPATCHES);
         // One invocation per leaf, or per internal node when only levels are computed.
@@ -162,9 +185,7 @@ impl TreeletRounds {
             level_dispatches: dispatched,
             level: 0,
             levels_only: u32::from(round.levels_only),
-            team_below: self
-                .forced_team_below
-                .unwrap_or_else(|| default_team_below(ctx.info.device_type)),
+            team_below: self.schedule.team_below(ctx.info.device_type),
         };
         let limit = count.limit(ctx);
         pass.dispatch(
@@ -218,8 +239,14 @@ impl TreeletRounds {
                 &treelet_buffers,
             );
         }
+        drop(pass);
         let mut climb_buffers = treelet_buffers.to_vec();
         climb_buffers.extend([state.levels, state.arrivals, state.waves]);
-        pass.dispatch(&self.climb, Grid::workgroups(1, 1), &params, &climb_buffers);
+        rec.pass("treelets climb").dispatch(
+            &self.climb,
+            Grid::workgroups(1, 1),
+            &params,
+            &climb_buffers,
+        );
     }
 }
