@@ -5,7 +5,9 @@
 //   1. cost: the root's cost from its children, whose subtrees are final now;
 //   2. formation: start from the root's two children, then repeatedly expand the treelet leaf of
 //      largest surface area that is an internal node (first on ties), up to treelet_size leaves
-//      (always reached: a root has at least gamma >= treelet_size primitives);
+//      (always reached: a root has at least gamma >= treelet_size primitives). Each leaf's node
+//      (box and children) is loaded once, when it joins the treelet: an expansion waits for one
+//      load, not two, and the DP's leaf boxes need none;
 //   3. dynamic programming over the subsets S of the leaves in increasing order (a subset's proper
 //      subsets come first): c(S) = min(Ci·a(S) + min_P (c(P) + c(S\P)), Ct·a(S)·t(S)), each
 //      unordered partition once (P over the non-empty subsets of S without its lowest bit, in
@@ -32,15 +34,11 @@ var<private> leaf_node: array<u32, MAX_TREELET>;
 var<private> leaf_min: array<vec3<f32>, MAX_TREELET>;
 var<private> leaf_max: array<vec3<f32>, MAX_TREELET>;
 var<private> leaf_prims: array<u32, MAX_TREELET>;
+// During the formation: each leaf's children (left, right) and area, -1 for a tree leaf (never
+// expanded).
+var<private> leaf_children: array<vec2<u32>, MAX_TREELET>;
+var<private> leaf_area: array<f32, MAX_TREELET>;
 var<private> internal_node: array<u32, MAX_TREELET>;
-
-fn node_area(node: u32) -> f32 {
-    return surface_area(nodes[node].min, nodes[node].max, params.zero);
-}
-
-fn is_leaf_node(node: u32) -> bool {
-    return (nodes[node].right_or_count & LEAF_FLAG) != 0u;
-}
 
 fn subset_cost(s: u32) -> f32 {
     return dp_cost[s - 1u];
@@ -109,42 +107,49 @@ fn best_partition(s: u32) -> vec2<u32> {
     return vec2<u32>(best_p, bitcast<u32>(best));
 }
 
-// Step 2: the treelet below `root`, into the private leaf arrays.
-fn form_treelet(root: u32) {
-    leaf_node[0] = nodes[root].left_or_first;
-    leaf_node[1] = nodes[root].right_or_count;
+// Makes `node` the treelet's leaf i: its box, children and area, from one load of the node.
+fn take_leaf(i: u32, node: u32) {
+    let n = nodes[node];
+    leaf_node[i] = node;
+    leaf_min[i] = n.min;
+    leaf_max[i] = n.max;
+    leaf_children[i] = vec2<u32>(n.left_or_first, n.right_or_count);
+    leaf_area[i] = select(surface_area(n.min, n.max, params.zero), -1.0, (n.right_or_count & LEAF_FLAG) != 0u);
+}
+
+// Steps 1 and 2: the root's cost from its children (final now), stored and returned; the treelet
+// below `root` into the private leaf arrays (leaves past treelet_size empty).
+fn form_treelet(root: u32) -> f32 {
+    let r = nodes[root];
+    let current = combine_cost(surface_area(r.min, r.max, params.zero), prim_counts[root], costs[r.left_or_first] + costs[r.right_or_count]);
+    costs[root] = current;
+    take_leaf(0u, r.left_or_first);
+    take_leaf(1u, r.right_or_count);
     internal_node[0] = root;
     for (var count = 2u; count < params.treelet_size; count++) {
         var best = 0u;
         var best_area = -1.0;
         for (var i = 0u; i < count; i++) {
-            let node = leaf_node[i];
-            if !is_leaf_node(node) {
-                let a = node_area(node);
-                if a > best_area {
-                    best_area = a;
-                    best = i;
-                }
+            if leaf_area[i] > best_area {
+                best_area = leaf_area[i];
+                best = i;
             }
         }
-        let expanded = leaf_node[best];
-        leaf_node[best] = nodes[expanded].left_or_first;
-        leaf_node[count] = nodes[expanded].right_or_count;
-        internal_node[count - 1u] = expanded;
+        internal_node[count - 1u] = leaf_node[best];
+        let children = leaf_children[best];
+        take_leaf(best, children.x);
+        take_leaf(count, children.y);
     }
     for (var i = 0u; i < MAX_TREELET; i++) {
         if i < params.treelet_size {
-            let node = leaf_node[i];
-            leaf_min[i] = nodes[node].min;
-            leaf_max[i] = nodes[node].max;
-            leaf_prims[i] = prim_counts[node];
+            leaf_prims[i] = prim_counts[leaf_node[i]];
         } else {
             leaf_min[i] = vec3<f32>(F32_MAX);
             leaf_max[i] = vec3<f32>(-F32_MAX);
             leaf_prims[i] = 0u;
         }
     }
-    build_half_tables();
+    return current;
 }
 
 // Step 4: the new topology of the treelet below `root` from the DP's costs (`full_split`: the
@@ -187,12 +192,8 @@ fn write_back(root: u32, full_split: u32, full_cost: f32) {
 
 // Steps 1-4 for the treelet rooted at `root`.
 fn optimize_treelet(root: u32) {
-    let left = nodes[root].left_or_first;
-    let right = nodes[root].right_or_count;
-    let prims = prim_counts[root];
-    let current = combine_cost(node_area(root), prims, costs[left] + costs[right]);
-    costs[root] = current;
-    form_treelet(root);
+    let current = form_treelet(root);
+    build_half_tables();
     let full = (1u << params.treelet_size) - 1u;
     for (var s = 1u; s < full; s++) {
         var c: f32;

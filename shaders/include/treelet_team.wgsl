@@ -2,8 +2,8 @@
 // process the subsets of one size in parallel"), for levels of few treelets, where one invocation
 // per treelet (treelet_dp.wgsl) leaves the device idle while each runs its ~1000 partition tests
 // alone. The same four steps, with the same operations and tie-breaking, so the same topology:
-//   1. lane 0: the root's cost and the formation (treelet_dp.wgsl's order; a leaf's area is
-//      computed once);
+//   1. lane 0: the root's cost and the formation (treelet_dp.wgsl's form_treelet), the leaves'
+//      boxes and counts into workgroup memory;
 //   2. lanes 0-15 and 16-31: the half tables' 16 entries each, straight from their leaves;
 //   3. the DP by subset size k = 2 ..= m: the C(m, k) subsets of size k (the table
 //      `subset_order`, `treelet::subsets_by_size`) side by side. When there are fewer subsets than
@@ -23,6 +23,9 @@ const TEAM_LANES: u32 = 32u;
 const TEAM_SUBSETS: u32 = 1u << MAX_TREELET;
 
 var<workgroup> team_leaf_node: array<u32, TEAMS * MAX_TREELET>;
+var<workgroup> team_leaf_min: array<vec3<f32>, TEAMS * MAX_TREELET>;
+var<workgroup> team_leaf_max: array<vec3<f32>, TEAMS * MAX_TREELET>;
+var<workgroup> team_leaf_prims: array<u32, TEAMS * MAX_TREELET>;
 var<workgroup> team_internal_node: array<u32, TEAMS * MAX_TREELET>;
 var<workgroup> team_low_min: array<vec3<f32>, TEAMS * 16u>;
 var<workgroup> team_low_max: array<vec3<f32>, TEAMS * 16u>;
@@ -67,37 +70,17 @@ fn team_subset_prims(base: u32, s: u32) -> u32 {
     return team_low_prims[base + (s & 15u)] + team_high_prims[base + (s >> 4u)];
 }
 
-// Step 1 (lane 0): the treelet's leaves and internal nodes; returns the root's cost.
+// Steps 1 and 2 (lane 0): the root's cost (returned) and the treelet (treelet_dp.wgsl's
+// form_treelet), copied into the team's leaf and internal node arrays.
 fn team_form(root: u32, team: u32) -> f32 {
+    let current = form_treelet(root);
     let leaves = team * MAX_TREELET;
-    let left = nodes[root].left_or_first;
-    let right = nodes[root].right_or_count;
-    let current = combine_cost(node_area(root), prim_counts[root], costs[left] + costs[right]);
-    costs[root] = current;
-    // Area of each leaf that is an internal node, -1 for a tree leaf (never expanded).
-    var area: array<f32, MAX_TREELET>;
-    team_leaf_node[leaves] = left;
-    team_leaf_node[leaves + 1u] = right;
-    area[0] = select(node_area(left), -1.0, is_leaf_node(left));
-    area[1] = select(node_area(right), -1.0, is_leaf_node(right));
-    team_internal_node[leaves] = root;
-    for (var count = 2u; count < params.treelet_size; count++) {
-        var best = 0u;
-        var best_area = -1.0;
-        for (var i = 0u; i < count; i++) {
-            if area[i] > best_area {
-                best_area = area[i];
-                best = i;
-            }
-        }
-        let expanded = team_leaf_node[leaves + best];
-        let l = nodes[expanded].left_or_first;
-        let r = nodes[expanded].right_or_count;
-        team_leaf_node[leaves + best] = l;
-        team_leaf_node[leaves + count] = r;
-        area[best] = select(node_area(l), -1.0, is_leaf_node(l));
-        area[count] = select(node_area(r), -1.0, is_leaf_node(r));
-        team_internal_node[leaves + count - 1u] = expanded;
+    for (var i = 0u; i < MAX_TREELET; i++) {
+        team_leaf_node[leaves + i] = leaf_node[i];
+        team_leaf_min[leaves + i] = leaf_min[i];
+        team_leaf_max[leaves + i] = leaf_max[i];
+        team_leaf_prims[leaves + i] = leaf_prims[i];
+        team_internal_node[leaves + i] = internal_node[i];
     }
     return current;
 }
@@ -167,10 +150,9 @@ fn optimize_treelet_team(root: u32, has_treelet: bool, team: u32, lane: u32) {
     for (var b = 3u; b < 4u; b--) {
         let i = first_leaf + b;
         if has_treelet && (t & (1u << b)) != 0u && i < m {
-            let node = team_leaf_node[leaves + i];
-            box_min = min(box_min, nodes[node].min);
-            box_max = max(box_max, nodes[node].max);
-            prims += prim_counts[node];
+            box_min = min(box_min, team_leaf_min[leaves + i]);
+            box_max = max(box_max, team_leaf_max[leaves + i]);
+            prims += team_leaf_prims[leaves + i];
         }
     }
     if lane < 16u {
