@@ -1,12 +1,16 @@
 // Treelet round, step 4: the levels above level_dispatches, in one workgroup (a few treelets per
 // level near the top of a tree: one dispatch each would mostly cost dispatch overhead). It starts
-// from the roots of level level_dispatches + 1 (bucketed by roots_bucket.wgsl) and climbs: after
-// each wave of treelets a root's parent joins the next wave once its other child is done: at once
-// when that child was processed before this kernel (level <= level_dispatches) or is no root,
-// else at the second arrival. Works for trees of any height. A wave of fewer than
-// min(params.team_below, TEAM_WAVE) treelets is optimized by the workgroup's TEAMS teams of 32
-// invocations, a treelet per team at a time (treelet_team.wgsl: the waves near the top hold one
-// to a few treelets); a larger wave one treelet per invocation (treelet_dp.wgsl).
+// from the roots of level top = level_dispatches + 1 (bucketed by roots_bucket.wgsl) and climbs a
+// level per wave: a root's level is one more than its children's highest (nodes_level.wgsl), so
+// the parents in the level above the wave's are exactly the next wave, each added once, by the
+// first of its children in the wave to claim it (an atomicMax of the next level into its arrival
+// counter, zeroed by roots_bucket.wgsl). Works for trees of any height. The next wave is found
+// before this wave's treelets are optimized, as they change neither a root's parent link nor any
+// level (no root of a wave is an ancestor of another), and by the workgroup's last invocations,
+// so that in a wave of few treelets a team without one finds it while the others optimize.
+// A wave of fewer than min(params.team_below, TEAM_WAVE) treelets is optimized by the workgroup's
+// TEAMS teams of 32 invocations, a treelet per team at a time (treelet_team.wgsl: the waves near
+// the top hold one to a few treelets); a larger wave one treelet per invocation (treelet_dp.wgsl).
 // Node data is only shared within the workgroup: storageBarriers order it.
 #include "bvh_node.wgsl"
 #include "treelet_round.wgsl"
@@ -27,7 +31,8 @@ const TEAM_WAVE: u32 = 32u;
 // `treelet::subsets_by_size`.
 @group(0) @binding(7) var<storage, read> subset_order: array<u32>;
 @group(0) @binding(8) var<storage, read> levels: array<u32>;
-// Arrival counters of the internal nodes, zeroed by roots_bucket.wgsl.
+// Per internal node: the highest level whose wave claimed it (0: none), zeroed by
+// roots_bucket.wgsl.
 @group(0) @binding(9) var<storage, read_write> arrivals: array<atomic<u32>>;
 // Two halves of `half` entries each: the current wave and the next.
 @group(0) @binding(10) var<storage, read_write> waves: array<u32>;
@@ -52,9 +57,12 @@ fn main(@builtin(local_invocation_index) lid: u32) {
     }
     if lid == 0u {
         wave_size = start;
+        atomicStore(&next_size, 0u);
     }
     var current = 0u;
+    var level = top;
     loop {
+        // The wave's entries (and the last wave's node data) are stored before they are read.
         storageBarrier();
         let size = workgroupUniformLoad(&wave_size);
         if size == 0u {
@@ -62,6 +70,18 @@ fn main(@builtin(local_invocation_index) lid: u32) {
         }
         let wave = current * half;
         let next = (1u - current) * half;
+        // The next wave: the parents one level up, the last invocations first.
+        for (var i = WORKGROUP - 1u - lid; i < size; i += WORKGROUP) {
+            let root = waves[wave + i];
+            if root != 0u {
+                let parent = parents[root];
+                // Both requests at once; only the first child of the wave to claim adds the parent.
+                let unclaimed = atomicMax(&arrivals[parent], level + 1u) <= level;
+                if levels[parent] == level + 1u && unclaimed {
+                    waves[next + atomicAdd(&next_size, 1u)] = parent;
+                }
+            }
+        }
         if size < min(params.team_below, TEAM_WAVE) {
             let team = lid / TEAM_LANES;
             for (var done = 0u; done < size; done += TEAMS) {
@@ -74,28 +94,12 @@ fn main(@builtin(local_invocation_index) lid: u32) {
                 optimize_treelet(waves[wave + i]);
             }
         }
-        if lid == 0u {
-            atomicStore(&next_size, 0u);
-        }
-        // This wave's node data is stored before the next wave reads it.
-        storageBarrier();
-        workgroupBarrier();
-        for (var i = lid; i < size; i += WORKGROUP) {
-            let root = waves[wave + i];
-            if root != 0u {
-                let parent = parents[root];
-                let left = nodes[parent].left_or_first;
-                let sibling = select(left, nodes[parent].right_or_count, left == root);
-                let waits = levels[sibling] >= top;
-                if !waits || atomicAdd(&arrivals[parent], 1u) == 1u {
-                    waves[next + atomicAdd(&next_size, 1u)] = parent;
-                }
-            }
-        }
         workgroupBarrier();
         if lid == 0u {
             wave_size = atomicLoad(&next_size);
+            atomicStore(&next_size, 0u);
         }
         current = 1u - current;
+        level++;
     }
 }
