@@ -8,20 +8,24 @@
 // levels below (treelets_optimize.wgsl, treelets_climb.wgsl). Costs of nodes below gamma are
 // final here; a root's cost is recomputed when its level is processed. The roots of each level
 // up to level_dispatches + 1 are counted in the schedule buffer (treelet_round.wgsl).
-// After the first round (levels_only), counts and costs are already those of the tree, and only
-// the roots (ancestors of roots are roots) need new levels: the climb starts at the roots whose
-// children are no roots (level 1; one invocation per internal node) and waits at a parent only
-// when the sibling is a root, climbing too; other internal nodes get level 0.
-// Node boxes and children were written by earlier dispatches (plain loads); the counts, costs and
-// levels this climb writes are shared across workgroups, so they go through atomics, ordered
-// around the counter increments by storageBarriers.
+// The first round also gives the LBVH its boxes (Karras 2012 §4, as bounds_refit.wgsl does for a
+// plain LBVH): each leaf's from its primitive, each internal node's from its children, in the
+// same climb (one climb per build saved). After the first round (levels_only), boxes, counts
+// and costs are those of the tree, and only the roots (ancestors of roots are roots) need new
+// levels: the climb starts at the roots whose children are no roots (level 1; one invocation per
+// internal node) and waits at a parent only when the sibling is a root, climbing too; other
+// internal nodes get level 0.
+// Node children were written by earlier dispatches; the boxes, counts, costs and levels this
+// climb writes are shared across workgroups, so all node data goes through atomics (node
+// words, node_words.wgsl), ordered around the counter increments by storageBarriers.
 #include "bvh_node.wgsl"
+#include "aabb.wgsl"
 #include "treelet_round.wgsl"
 
 const WORKGROUP: u32 = 64u;
 
 @group(0) @binding(0) var<uniform> params: RoundParams;
-@group(0) @binding(1) var<storage, read> nodes: array<BvhNode>;
+@group(0) @binding(1) var<storage, read_write> node_words: array<atomic<u32>>;
 @group(0) @binding(2) var<storage, read> parents: array<u32>;
 @group(0) @binding(3) var<storage, read_write> prim_counts: array<atomic<u32>>;
 @group(0) @binding(4) var<storage, read_write> costs: array<atomic<u32>>;
@@ -30,12 +34,21 @@ const WORKGROUP: u32 = 64u;
 @group(0) @binding(7) var<storage, read_write> schedule: array<atomic<u32>>;
 // The item count's limit (`gpu::ItemCount`): the tree has min(params.count, count_limit[0]) leaves.
 @group(0) @binding(8) var<storage, read> count_limit: array<u32>;
+// First round: the primitive boxes and the primitive of each leaf (the sorted order).
+@group(0) @binding(9) var<storage, read> prim_boxes: array<Aabb>;
+@group(0) @binding(10) var<storage, read> order: array<u32>;
+
+#include "node_words.wgsl"
 
 var<workgroup> climbing: atomic<u32>;
 var<workgroup> any_climbing: u32;
 
-fn node_area(node: u32) -> f32 {
-    return surface_area(nodes[node].min, nodes[node].max, params.zero);
+fn left_child(node: u32) -> u32 {
+    return atomicLoad(&node_words[node * 8u + 3u]);
+}
+
+fn right_child(node: u32) -> u32 {
+    return atomicLoad(&node_words[node * 8u + 7u]);
 }
 
 fn is_root(node: u32) -> bool {
@@ -63,7 +76,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
         if j + 1u < n {
             if !is_root(j) {
                 atomicStore(&levels[j], 0u);
-            } else if !is_root(nodes[j].left_or_first) && !is_root(nodes[j].right_or_count) {
+            } else if !is_root(left_child(j)) && !is_root(right_child(j)) {
                 // Level 1 is always counted (level_dispatches + 1 >= 1).
                 atomicStore(&levels[j], 1u);
                 atomicAdd(&schedule[0], 1u);
@@ -74,8 +87,12 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
             }
         }
     } else if j < n {
+        let b = prim_boxes[order[j]];
+        store_box(node, b.min, b.max);
+        atomicStore(&node_words[node * 8u + 3u], j);
+        atomicStore(&node_words[node * 8u + 7u], LEAF_FLAG | 1u);
         atomicStore(&prim_counts[node], 1u);
-        atomicStore(&costs[node], bitcast<u32>(params.ct * node_area(node)));
+        atomicStore(&costs[node], bitcast<u32>(params.ct * surface_area(b.min, b.max, params.zero)));
         atomicStore(&levels[node], 0u);
         is_climbing = node != 0u;
         if is_climbing {
@@ -88,8 +105,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
         storageBarrier();
         if is_climbing {
             let parent = parents[node];
-            let left = nodes[parent].left_or_first;
-            let sibling = select(left, nodes[parent].right_or_count, left == node);
+            let left = left_child(parent);
+            let sibling = select(left, right_child(parent), left == node);
             let waits = params.levels_only == 0u || is_root(sibling);
             if waits && atomicAdd(&arrivals[parent], 1u) == 0u {
                 // First arrival: the sibling's invocation will finish the parent.
@@ -102,13 +119,16 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
         // Acquire: the sibling's data, stored before its increment, is visible now.
         storageBarrier();
         if is_climbing {
-            let left = nodes[node].left_or_first;
-            let right = nodes[node].right_or_count;
+            let left = left_child(node);
+            let right = right_child(node);
             if params.levels_only == 0u {
+                let lo = min(load_min(left), load_min(right));
+                let hi = max(load_max(left), load_max(right));
+                store_box(node, lo, hi);
                 let prims = atomicLoad(&prim_counts[left]) + atomicLoad(&prim_counts[right]);
                 let children = bitcast<f32>(atomicLoad(&costs[left])) + bitcast<f32>(atomicLoad(&costs[right]));
                 atomicStore(&prim_counts[node], prims);
-                atomicStore(&costs[node], bitcast<u32>(combine_cost(node_area(node), prims, children)));
+                atomicStore(&costs[node], bitcast<u32>(combine_cost(surface_area(lo, hi, params.zero), prims, children)));
             }
             var level = 0u;
             if is_root(node) {

@@ -1,5 +1,7 @@
 // Boxes as the reduction kernels exchange them (32 bytes, the layout of a BvhNode's bounds).
 
+#include "constants.wgsl"
+
 struct Aabb {
     min: vec3<f32>,
     pad0: u32,
@@ -7,4 +9,3 @@ struct Aabb {
     pad1: u32,
 }
 
-const F32_MAX: f32 = 3.40282347e38;

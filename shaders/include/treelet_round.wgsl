@@ -37,8 +37,6 @@ struct RoundParams {
 const SCHEDULE_CURSORS: u32 = MAX_LEVEL_DISPATCHES + 1u;
 const SCHEDULE_ARGS: u32 = 2u * (MAX_LEVEL_DISPATCHES + 1u);
 
-const F32_MAX: f32 = 3.40282347e38;
-
 // Cost of a node of area a and n primitives whose children cost `children` in total:
 // min(Ci·a + children, Ct·a·n where a leaf of n primitives is allowed).
 fn combine_cost(a: f32, n: u32, children: f32) -> f32 {

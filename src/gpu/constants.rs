@@ -62,6 +62,7 @@ pub fn wgsl() -> String {
         u32_const("RADIX_BITS", RADIX_BITS),
         u32_const("SORT_TILE", SORT_TILE),
         u32_const("SCAN_BLOCK", SCAN_BLOCK),
+        f32_const("F32_MAX", f32::MAX),
     ]
     .concat()
 }

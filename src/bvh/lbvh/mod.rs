@@ -194,9 +194,25 @@ impl LbvhBuilder {
         nodes: &wgpu::Buffer,
         order: &wgpu::Buffer,
     ) -> Result<()> {
+        self.record_hierarchy_into(rec, input, nodes, order)?;
+        self.record_refit(rec, input.count(), nodes, order);
+        Ok(())
+    }
+
+    /// Like `record_into` without the boxes: the internal nodes' children in `nodes` and the
+    /// sorted primitive order in `order`, for a caller that computes the boxes in a bottom-up
+    /// climb of its own (the treelet rounds' first schedule does, with its counts and costs).
+    /// `parents` and `prim_boxes` hold the links and the boxes to climb with.
+    pub fn record_hierarchy_into(
+        &mut self,
+        rec: &mut Recorder<'_>,
+        input: LbvhInput<'_>,
+        nodes: &wgpu::Buffer,
+        order: &wgpu::Buffer,
+    ) -> Result<()> {
         self.reserve(rec.ctx, input.count().capacity())?;
         self.record_keys(rec, input, order);
-        self.record_tree(rec, input.count(), nodes, order)
+        self.record_hierarchy(rec, input.count(), nodes, order)
     }
 
     /// Grows the scratch space to hold `capacity` primitives.
@@ -250,7 +266,8 @@ impl LbvhBuilder {
             read_buffer(ctx, scratch.bounds_levels.last().expect("one level"), 1)?;
         let keys = read_keys(ctx, &scratch.keys, n)?;
         let mut rec = Recorder::new(ctx, &mut params, None);
-        self.record_tree(&mut rec, input.count(), &tree.nodes, &tree.prim_indices)?;
+        self.record_hierarchy(&mut rec, input.count(), &tree.nodes, &tree.prim_indices)?;
+        self.record_refit(&mut rec, input.count(), &tree.nodes, &tree.prim_indices);
         rec.submit();
         let scratch = self.scratch.as_ref().expect("reserved");
         let sorted_prims: Vec<u32> = read_buffer(ctx, &tree.prim_indices, n as usize)?;
@@ -296,9 +313,9 @@ impl LbvhBuilder {
         );
     }
 
-    /// Stages 3-5: sort, hierarchy emission, bottom-up bounds into `nodes`, with the leaves'
-    /// primitives in `order`.
-    fn record_tree(
+    /// Stages 3-4: sort and hierarchy emission into `nodes`, with the leaves' primitives in
+    /// `order`.
+    fn record_hierarchy(
         &mut self,
         rec: &mut Recorder<'_>,
         count: ItemCount<'_>,
@@ -308,11 +325,21 @@ impl LbvhBuilder {
         let scratch = self.scratch.as_ref().expect("reserved");
         self.sort
             .record(rec, &scratch.keys, order, count, self.morton.key_bits)?;
-        {
-            let mut pass = rec.pass("hierarchy");
-            self.hierarchy
-                .record(&mut pass, &scratch.keys, count, nodes, &scratch.parents);
-        }
+        let mut pass = rec.pass("hierarchy");
+        self.hierarchy
+            .record(&mut pass, &scratch.keys, count, nodes, &scratch.parents);
+        Ok(())
+    }
+
+    /// Stage 5: bottom-up bounds into `nodes`.
+    fn record_refit(
+        &self,
+        rec: &mut Recorder<'_>,
+        count: ItemCount<'_>,
+        nodes: &wgpu::Buffer,
+        order: &wgpu::Buffer,
+    ) {
+        let scratch = self.scratch.as_ref().expect("reserved");
         rec.encoder().clear_buffer(&scratch.arrivals, 0, None);
         let mut pass = rec.pass("refit");
         self.refit.record(
@@ -324,7 +351,6 @@ impl LbvhBuilder {
             nodes,
             &scratch.arrivals,
         );
-        Ok(())
     }
 }
 

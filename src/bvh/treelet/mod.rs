@@ -403,7 +403,14 @@ impl TrbvhBuilder {
                 (count, LbvhInput::PrimBoxes(count))
             }
         };
-        self.lbvh.record_into(rec, input, &nodes, &order)?;
+        // The first round's schedule computes the boxes with its counts and costs; a test that
+        // reads the LBVH back has the LBVH's own refit compute them first (the same boxes).
+        if lbvh_out.is_some() {
+            self.lbvh.record_into(rec, input, &nodes, &order)?;
+        } else {
+            self.lbvh
+                .record_hierarchy_into(rec, input, &nodes, &order)?;
+        }
         self.last_capacity = n;
         self.last_split = split_total.is_some();
         if let Some(out) = lbvh_out {
@@ -424,6 +431,8 @@ impl TrbvhBuilder {
         let scratch = self.scratch.as_ref().expect("reserved");
         let state = TreeletState {
             nodes: &scratch.nodes,
+            prim_boxes: self.lbvh.prim_boxes().expect("reserved"),
+            order: &scratch.order,
             parents: self.lbvh.parents().expect("built"),
             prim_counts: &scratch.prim_counts,
             costs: &scratch.costs,

@@ -56,7 +56,12 @@ const SCHEDULE_ARGS: u64 = 2 * (MAX_LEVEL_DISPATCHES as u64 + 1);
 
 /// Per-node state the rounds and the collapse share (sized for n leaves, 2n-1 nodes).
 pub(crate) struct TreeletState<'a> {
+    /// The working tree: the LBVH's children (the first round computes the boxes), then the
+    /// rounds' topology.
     pub nodes: &'a wgpu::Buffer,
+    /// The primitive boxes and the primitive of each leaf (the LBVH's sorted order).
+    pub prim_boxes: &'a wgpu::Buffer,
+    pub order: &'a wgpu::Buffer,
     pub parents: &'a wgpu::Buffer,
     pub prim_counts: &'a wgpu::Buffer,
     pub costs: &'a wgpu::Buffer,
@@ -201,6 +206,8 @@ impl TreeletRounds {
                 state.arrivals,
                 state.schedule,
                 limit,
+                state.prim_boxes,
+                state.order,
             ],
         );
         if round.gamma == u32::MAX {
