@@ -10,11 +10,10 @@
 // up to level_dispatches + 1 are counted in the schedule buffer (treelet_round.wgsl).
 // The first round also gives the LBVH its boxes (Karras 2012 §4, as bounds_refit.wgsl does for a
 // plain LBVH): each leaf's from its primitive, each internal node's from its children, in the
-// same climb (one climb per build saved). After the first round (levels_only), boxes, counts
-// and costs are those of the tree, and only the roots (ancestors of roots are roots) need new
-// levels: the climb starts at the roots whose children are no roots (level 1; one invocation per
-// internal node) and waits at a parent only when the sibling is a root, climbing too; other
-// internal nodes get level 0.
+// same climb (one climb per build saved). After the first round (levels_only), boxes, counts,
+// costs and the roots' levels of the new gamma are those the treelet kernels of the round before
+// left (treelet_dp.wgsl, step 5): one invocation per internal node only counts the roots per
+// level, without a climb.
 // Node children were written by earlier dispatches; the boxes, counts, costs and levels this
 // climb writes are shared across workgroups, so all node data goes through atomics (node
 // words, node_words.wgsl), ordered around the counter increments by storageBarriers.
@@ -71,19 +70,11 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
     workgroupBarrier();
     var is_climbing = false;
     if params.levels_only != 0u {
-        // Invocation j: internal node j.
-        node = j;
-        if j + 1u < n {
-            if !is_root(j) {
-                atomicStore(&levels[j], 0u);
-            } else if !is_root(left_child(j)) && !is_root(right_child(j)) {
-                // Level 1 is always counted (level_dispatches + 1 >= 1).
-                atomicStore(&levels[j], 1u);
-                atomicAdd(&schedule[0], 1u);
-                is_climbing = j != 0u;
-                if is_climbing {
-                    atomicAdd(&climbing, 1u);
-                }
+        // Invocation j: internal node j, whose level the round before computed; no climb.
+        if j + 1u < n && is_root(j) {
+            let level = atomicLoad(&levels[j]);
+            if level >= 1u && level <= params.level_dispatches + 1u {
+                atomicAdd(&schedule[level - 1u], 1u);
             }
         }
     } else if j < n {
@@ -105,10 +96,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
         storageBarrier();
         if is_climbing {
             let parent = parents[node];
-            let left = left_child(parent);
-            let sibling = select(left, right_child(parent), left == node);
-            let waits = params.levels_only == 0u || is_root(sibling);
-            if waits && atomicAdd(&arrivals[parent], 1u) == 0u {
+            if atomicAdd(&arrivals[parent], 1u) == 0u {
                 // First arrival: the sibling's invocation will finish the parent.
                 is_climbing = false;
                 atomicSub(&climbing, 1u);
@@ -121,15 +109,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
         if is_climbing {
             let left = left_child(node);
             let right = right_child(node);
-            if params.levels_only == 0u {
-                let lo = min(load_min(left), load_min(right));
-                let hi = max(load_max(left), load_max(right));
-                store_box(node, lo, hi);
-                let prims = atomicLoad(&prim_counts[left]) + atomicLoad(&prim_counts[right]);
-                let children = bitcast<f32>(atomicLoad(&costs[left])) + bitcast<f32>(atomicLoad(&costs[right]));
-                atomicStore(&prim_counts[node], prims);
-                atomicStore(&costs[node], bitcast<u32>(combine_cost(surface_area(lo, hi, params.zero), prims, children)));
-            }
+            let lo = min(load_min(left), load_min(right));
+            let hi = max(load_max(left), load_max(right));
+            store_box(node, lo, hi);
+            let prims = atomicLoad(&prim_counts[left]) + atomicLoad(&prim_counts[right]);
+            let children = bitcast<f32>(atomicLoad(&costs[left])) + bitcast<f32>(atomicLoad(&costs[right]));
+            atomicStore(&prim_counts[node], prims);
+            atomicStore(&costs[node], bitcast<u32>(combine_cost(surface_area(lo, hi, params.zero), prims, children)));
             var level = 0u;
             if is_root(node) {
                 level = max(child_level(left), child_level(right)) + 1u;

@@ -30,12 +30,15 @@ const TEAM_WAVE: u32 = 32u;
 @group(0) @binding(6) var<storage, read> roots: array<u32>;
 // `treelet::subsets_by_size`.
 @group(0) @binding(7) var<storage, read> subset_order: array<u32>;
-@group(0) @binding(8) var<storage, read> levels: array<u32>;
+// The next round's level of each node a treelet finishes (treelet_dp.wgsl).
+@group(0) @binding(8) var<storage, read_write> next_levels: array<u32>;
+// This round's level of each root.
+@group(0) @binding(9) var<storage, read> levels: array<u32>;
 // Per internal node: the highest level whose wave claimed it (0: none), zeroed by
 // roots_bucket.wgsl.
-@group(0) @binding(9) var<storage, read_write> arrivals: array<atomic<u32>>;
+@group(0) @binding(10) var<storage, read_write> arrivals: array<atomic<u32>>;
 // Two halves of `half` entries each: the current wave and the next.
-@group(0) @binding(10) var<storage, read_write> waves: array<u32>;
+@group(0) @binding(11) var<storage, read_write> waves: array<u32>;
 
 #include "treelet_dp.wgsl"
 #include "treelet_team.wgsl"

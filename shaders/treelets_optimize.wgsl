@@ -18,6 +18,8 @@ const TEAMS: u32 = 1u;
 @group(0) @binding(6) var<storage, read> roots: array<u32>;
 // `treelet::subsets_by_size`.
 @group(0) @binding(7) var<storage, read> subset_order: array<u32>;
+// The next round's level of each node a treelet finishes (treelet_dp.wgsl).
+@group(0) @binding(8) var<storage, read_write> next_levels: array<u32>;
 
 #include "treelet_dp.wgsl"
 #include "treelet_team.wgsl"

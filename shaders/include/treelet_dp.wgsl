@@ -18,12 +18,16 @@
 //   4. if the optimal cost is lower than the current one, the new topology is written back
 //      breadth-first (left child = the best P, right = S\P), reusing the treelet's internal
 //      nodes in formation order (the root keeps its index), with boxes, N, C and parent links.
-//      The best P of an internal subset is found again from the stored costs (the same search).
+//      The best P of an internal subset is found again from the stored costs (the same search);
+//   5. the next round's level (gamma = params.next_gamma) of every node the treelet finished,
+//      children first: one more than its children's highest, for nodes of at least next_gamma
+//      primitives. Each such node is a root of this round or an internal node of one of its
+//      treelets, finished after its children, so the next round needs no climb for its levels.
 // The CPU twin is `WorkingTree::optimize_treelet` (same operations in the same order; costs agree
 // to a few ulps where the GPU fuses Ci·a into the following add).
 // The including kernel declares `params: RoundParams` (treelet_round.wgsl), `nodes:
 // array<BvhNode>`, `parents: array<u32>`, `prim_counts: array<u32>`, `costs: array<f32>` (all
-// read_write storage).
+// read_write storage) and `next_levels: array<u32>` (read_write storage).
 
 // Subsets 1 ..= 2^MAX_TREELET - 2 (the full set is never stored).
 const DP_SLOTS: u32 = (1u << MAX_TREELET) - 2u;
@@ -152,6 +156,21 @@ fn form_treelet(root: u32) -> f32 {
     return current;
 }
 
+// The next round's level of `node` where it roots a treelet there (0 below next_gamma primitives:
+// its stored level is stale).
+fn next_level(node: u32) -> u32 {
+    return select(0u, next_levels[node], prim_counts[node] >= params.next_gamma);
+}
+
+// Step 5 for one node whose children are final: its level in the next round.
+fn store_next_level(node: u32) {
+    var level = 0u;
+    if prim_counts[node] >= params.next_gamma {
+        level = 1u + max(next_level(nodes[node].left_or_first), next_level(nodes[node].right_or_count));
+    }
+    next_levels[node] = level;
+}
+
 // Step 4: the new topology of the treelet below `root` from the DP's costs (`full_split`: the
 // full set's best partition, `full_cost`: its cost).
 fn write_back(root: u32, full_split: u32, full_cost: f32) {
@@ -188,6 +207,10 @@ fn write_back(root: u32, full_split: u32, full_cost: f32) {
         prim_counts[node] = subset_prims(s);
         costs[node] = cost;
     }
+    // Step 5, children first (breadth-first order reversed); the root last.
+    for (var e = queued; e > 0u; e--) {
+        store_next_level(queue_node[e - 1u]);
+    }
 }
 
 // Steps 1-4 for the treelet rooted at `root`.
@@ -210,5 +233,7 @@ fn optimize_treelet(root: u32) {
     let full_cost = combine_cost(full_area, subset_prims(full), bitcast<f32>(best.y));
     if full_cost < current {
         write_back(root, best.x, full_cost);
+    } else {
+        store_next_level(root);
     }
 }

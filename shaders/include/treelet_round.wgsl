@@ -24,11 +24,17 @@ struct RoundParams {
     // The level a treelets_optimize dispatch processes (1 = treelets without treelets below).
     level: u32,
     // 1 after the first round: counts and costs are still those of the tree (the treelet kernels
-    // rewrite both consistently), so nodes_level only gives the roots of the new gamma levels.
+    // rewrite both consistently), and so are the levels of the new gamma (the treelet kernels of
+    // the round before computed them), so nodes_level only counts the roots per level.
     levels_only: u32,
     // A level of fewer treelets is optimized by teams of invocations, a treelet per team
     // (treelets_optimize.wgsl, treelets_climb.wgsl).
     team_below: u32,
+    // gamma of the next round (0xffffffff: none), whose levels the treelet kernels compute.
+    next_gamma: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 }
 
 // The schedule buffer (u32 words): per level L = 1 ..= MAX_LEVEL_DISPATCHES + 1, the number of

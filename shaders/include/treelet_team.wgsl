@@ -12,7 +12,8 @@
 //      this is the partition the serial search keeps. Costs and best partitions live in workgroup
 //      memory; a barrier separates sizes;
 //   4. lane 0: the write-back, taking each internal subset's partition from the DP instead of
-//      searching it again.
+//      searching it again;
+//   5. lane 0: the next round's levels (treelet_dp.wgsl).
 // The including kernel declares TEAMS (teams per workgroup), `subset_order` and what
 // treelet_dp.wgsl needs, and includes treelet_dp.wgsl first. `optimize_treelet_team` contains
 // barriers: every invocation of the workgroup calls it, teams without a treelet with
@@ -122,6 +123,10 @@ fn team_write_back(root: u32, team: u32, full_split: u32, full_cost: f32) {
         nodes[node] = BvhNode(team_subset_min(halves, s), child[0], team_subset_max(halves, s), child[1]);
         prim_counts[node] = team_subset_prims(halves, s);
         costs[node] = cost;
+    }
+    // Step 5 (treelet_dp.wgsl), children first.
+    for (var e = queued; e > 0u; e--) {
+        store_next_level(queue_node[e - 1u]);
     }
 }
 
@@ -243,6 +248,8 @@ fn optimize_treelet_team(root: u32, has_treelet: bool, team: u32, lane: u32) {
         let full_cost = combine_cost(full_area, team_subset_prims(halves, full), full_best);
         if full_cost < current {
             team_write_back(root, team, full_split, full_cost);
+        } else {
+            store_next_level(root);
         }
     }
 }

@@ -202,7 +202,8 @@ struct Scratch {
     order: wgpu::Buffer,
     prim_counts: wgpu::Buffer,
     costs: wgpu::Buffer,
-    levels: wgpu::Buffer,
+    /// Treelet levels of the odd and even rounds (each round computes the next one's).
+    levels: [wgpu::Buffer; 2],
     arrivals: wgpu::Buffer,
     schedule: wgpu::Buffer,
     roots: wgpu::Buffer,
@@ -224,7 +225,10 @@ impl Scratch {
             order: storage_buffer_zeroed(ctx, "treelet working order", u64::from(capacity) * 4)?,
             prim_counts: storage_buffer_zeroed(ctx, "treelet prim counts", nodes * 4)?,
             costs: storage_buffer_zeroed(ctx, "treelet costs", nodes * 4)?,
-            levels: storage_buffer_zeroed(ctx, "treelet levels", nodes * 4)?,
+            levels: [
+                storage_buffer_zeroed(ctx, "treelet levels", nodes * 4)?,
+                storage_buffer_zeroed(ctx, "treelet levels", nodes * 4)?,
+            ],
             arrivals: storage_buffer_zeroed(ctx, "treelet arrivals", u64::from(capacity) * 4)?,
             schedule: indirect_buffer_zeroed(ctx, "treelet schedule", SCHEDULE_WORDS * 4)?,
             roots: storage_buffer_zeroed(ctx, "treelet roots", u64::from(capacity) * 4)?,
@@ -429,29 +433,37 @@ impl TrbvhBuilder {
         tree.reserve(ctx, 2 * n - 1, n)?;
         self.collapse.reserve(ctx, n)?;
         let scratch = self.scratch.as_ref().expect("reserved");
-        let state = TreeletState {
+        let mut state = TreeletState {
             nodes: &scratch.nodes,
             prim_boxes: self.lbvh.prim_boxes().expect("reserved"),
             order: &scratch.order,
             parents: self.lbvh.parents().expect("built"),
             prim_counts: &scratch.prim_counts,
             costs: &scratch.costs,
-            levels: &scratch.levels,
+            levels: &scratch.levels[0],
+            next_levels: &scratch.levels[1],
             arrivals: &scratch.arrivals,
             schedule: &scratch.schedule,
             roots: &scratch.roots,
             waves: &scratch.waves,
         };
         let model = CostModel::from(&self.sah);
-        for (r, gamma) in self.settings.gammas().into_iter().enumerate() {
-            rec.encoder().clear_buffer(&scratch.arrivals, 0, None);
+        let gammas = self.settings.gammas();
+        for (r, &gamma) in gammas.iter().enumerate() {
+            if r == 0 {
+                // The first schedule's climb counts arrivals.
+                rec.encoder().clear_buffer(&scratch.arrivals, 0, None);
+            }
             rec.encoder().clear_buffer(&scratch.schedule, 0, None);
             let round = Round {
                 model,
                 treelet_size: self.settings.treelet_size,
                 gamma,
+                next_gamma: gammas.get(r + 1).copied().unwrap_or(u32::MAX),
                 levels_only: r > 0,
             };
+            state.levels = &scratch.levels[r % 2];
+            state.next_levels = &scratch.levels[(r + 1) % 2];
             self.rounds.record(rec, count, &state, &round);
         }
         let mut pass = rec.pass("collapse");

@@ -44,8 +44,11 @@ pub struct RoundParams {
     levels_only: u32,
     /// Levels of fewer treelets are optimized by teams (see the module header).
     team_below: u32,
+    /// γ of the next round (u32::MAX: none), whose levels the treelet kernels compute.
+    next_gamma: u32,
+    _pad: [u32; 3],
 }
-const _: () = assert!(std::mem::size_of::<RoundParams>() == 48);
+const _: () = assert!(std::mem::size_of::<RoundParams>() == 64);
 
 /// Words of the schedule buffer: roots and cursors per level (levels 1 ..= MAX_LEVEL_DISPATCHES
 /// + 1), then the indirect arguments (x, y, z) of each dispatched level.
@@ -65,8 +68,11 @@ pub(crate) struct TreeletState<'a> {
     pub parents: &'a wgpu::Buffer,
     pub prim_counts: &'a wgpu::Buffer,
     pub costs: &'a wgpu::Buffer,
-    /// Treelet level of each node (0: no treelet root).
+    /// Treelet level of each root in this round (computed by the first round's schedule, or by
+    /// the round before), and in the next round (computed by this round's treelet kernels for
+    /// every node they finish); a node below γ has no level.
     pub levels: &'a wgpu::Buffer,
+    pub next_levels: &'a wgpu::Buffer,
     /// Arrival counters of the internal nodes (n words), zeroed before each round.
     pub arrivals: &'a wgpu::Buffer,
     /// `SCHEDULE_WORDS` words (storage and indirect), zeroed before each round.
@@ -82,8 +88,10 @@ pub(crate) struct Round {
     pub model: CostModel,
     pub treelet_size: u32,
     pub gamma: u32,
-    /// The counts and costs are those of the tree (a round ran before): only the treelet
-    /// roots' levels are computed, by a climb over the roots alone.
+    /// γ of the round after this one, u32::MAX if none.
+    pub next_gamma: u32,
+    /// A round ran before: the counts and costs are those of the tree, and the treelet roots'
+    /// levels were computed by its treelet kernels (the schedule only counts them).
     pub levels_only: bool,
 }
 
@@ -191,6 +199,8 @@ impl TreeletRounds {
             level: 0,
             levels_only: u32::from(round.levels_only),
             team_below: self.schedule.team_below(ctx.info.device_type),
+            next_gamma: round.next_gamma,
+            _pad: [0; 3],
         };
         let limit = count.limit(ctx);
         pass.dispatch(
@@ -234,6 +244,7 @@ impl TreeletRounds {
             state.schedule,
             state.roots,
             &self.subsets,
+            state.next_levels,
         ];
         for level in 1..=dispatched {
             params.level = level;

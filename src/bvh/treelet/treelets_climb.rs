@@ -5,4 +5,4 @@ use super::rounds::RoundParams;
 use crate::gpu::kernel;
 
 kernel!(pub TREELETS_CLIMB: RoundParams = "treelets_climb"::"main", [128, 1, 1],
-    [ReadWrite, ReadWrite, ReadWrite, ReadWrite, Read, Read, Read, Read, ReadWrite, ReadWrite]);
+    [ReadWrite, ReadWrite, ReadWrite, ReadWrite, Read, Read, Read, ReadWrite, Read, ReadWrite, ReadWrite]);

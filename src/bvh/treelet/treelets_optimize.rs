@@ -5,4 +5,4 @@ use super::rounds::RoundParams;
 use crate::gpu::kernel;
 
 kernel!(pub TREELETS_OPTIMIZE: RoundParams = "treelets_optimize"::"main", [32, 1, 1],
-    [ReadWrite, ReadWrite, ReadWrite, ReadWrite, Read, Read, Read]);
+    [ReadWrite, ReadWrite, ReadWrite, ReadWrite, Read, Read, Read, ReadWrite]);
