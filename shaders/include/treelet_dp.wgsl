@@ -43,6 +43,9 @@ var<private> leaf_prims: array<u32, MAX_TREELET>;
 var<private> leaf_children: array<vec2<u32>, MAX_TREELET>;
 var<private> leaf_area: array<f32, MAX_TREELET>;
 var<private> internal_node: array<u32, MAX_TREELET>;
+// The root's children and primitive count before restructuring.
+var<private> root_children: vec2<u32>;
+var<private> root_prims: u32;
 
 fn subset_cost(s: u32) -> f32 {
     return dp_cost[s - 1u];
@@ -125,7 +128,9 @@ fn take_leaf(i: u32, node: u32) {
 // below `root` into the private leaf arrays (leaves past treelet_size empty).
 fn form_treelet(root: u32) -> f32 {
     let r = nodes[root];
-    let current = combine_cost(surface_area(r.min, r.max, params.zero), prim_counts[root], costs[r.left_or_first] + costs[r.right_or_count]);
+    root_children = vec2<u32>(r.left_or_first, r.right_or_count);
+    root_prims = prim_counts[root];
+    let current = combine_cost(surface_area(r.min, r.max, params.zero), root_prims, costs[r.left_or_first] + costs[r.right_or_count]);
     costs[root] = current;
     take_leaf(0u, r.left_or_first);
     take_leaf(1u, r.right_or_count);
@@ -156,19 +161,52 @@ fn form_treelet(root: u32) -> f32 {
     return current;
 }
 
-// The next round's level of `node` where it roots a treelet there (0 below next_gamma primitives:
-// its stored level is stale).
-fn next_level(node: u32) -> u32 {
-    return select(0u, next_levels[node], prim_counts[node] >= params.next_gamma);
+// Step 5's record of a write-back, per node written (breadth-first entry e): the node, its
+// primitive count and its children, each as a code: leaf i (< MAX_TREELET) or entry j
+// (MAX_TREELET + j).
+var<private> written_node: array<u32, MAX_TREELET>;
+var<private> written_prims: array<u32, MAX_TREELET>;
+var<private> written_children: array<vec2<u32>, MAX_TREELET>;
+
+// The code of a write-back's child `part` (a subset of the leaves): the leaf, or the entry it is
+// queued as (`queued`).
+fn child_code(part: u32, queued: u32) -> u32 {
+    return select(MAX_TREELET + queued, firstTrailingBit(part), countOneBits(part) == 1u);
 }
 
-// Step 5 for one node whose children are final: its level in the next round.
-fn store_next_level(node: u32) {
-    var level = 0u;
-    if prim_counts[node] >= params.next_gamma {
-        level = 1u + max(next_level(nodes[node].left_or_first), next_level(nodes[node].right_or_count));
+// Step 5 after a write-back of `written` entries: the next round's level of each node written,
+// children first, from the treelet leaves' levels (all loaded at once: no load waits for another)
+// and the entries' own; no node data is read back.
+fn store_next_levels(written: u32) {
+    var level_of: array<u32, 2u * MAX_TREELET>;
+    for (var i = 0u; i < MAX_TREELET; i++) {
+        let is_root = i < params.treelet_size && leaf_prims[i] >= params.next_gamma;
+        level_of[i] = select(0u, next_levels[leaf_node[min(i, params.treelet_size - 1u)]], is_root);
     }
-    next_levels[node] = level;
+    for (var e = written; e > 0u; e--) {
+        let entry = e - 1u;
+        var level = 0u;
+        if written_prims[entry] >= params.next_gamma {
+            let children = written_children[entry];
+            level = 1u + max(level_of[children.x], level_of[children.y]);
+        }
+        level_of[MAX_TREELET + entry] = level;
+        next_levels[written_node[entry]] = level;
+    }
+}
+
+// Step 5 when the treelet keeps its topology: only the root is new to finish (its children were
+// finished before it).
+fn store_root_next_level(root: u32) {
+    var level = 0u;
+    if root_prims >= params.next_gamma {
+        let l = root_children.x;
+        let r = root_children.y;
+        let left = select(0u, next_levels[l], prim_counts[l] >= params.next_gamma);
+        let right = select(0u, next_levels[r], prim_counts[r] >= params.next_gamma);
+        level = 1u + max(left, right);
+    }
+    next_levels[root] = level;
 }
 
 // Step 4: the new topology of the treelet below `root` from the DP's costs (`full_split`: the
@@ -191,8 +229,10 @@ fn write_back(root: u32, full_split: u32, full_cost: f32) {
         }
         let parts = array<u32, 2>(split, s ^ split);
         var child = array<u32, 2>(0u, 0u);
+        var code = vec2<u32>(0u);
         for (var k = 0u; k < 2u; k++) {
             let part = parts[k];
+            code[k] = child_code(part, queued);
             if countOneBits(part) == 1u {
                 child[k] = leaf_node[firstTrailingBit(part)];
             } else {
@@ -203,14 +243,15 @@ fn write_back(root: u32, full_split: u32, full_cost: f32) {
             }
             parents[child[k]] = node;
         }
+        let prims = subset_prims(s);
         nodes[node] = BvhNode(subset_min(s), child[0], subset_max(s), child[1]);
-        prim_counts[node] = subset_prims(s);
+        prim_counts[node] = prims;
         costs[node] = cost;
+        written_node[head] = node;
+        written_prims[head] = prims;
+        written_children[head] = code;
     }
-    // Step 5, children first (breadth-first order reversed); the root last.
-    for (var e = queued; e > 0u; e--) {
-        store_next_level(queue_node[e - 1u]);
-    }
+    store_next_levels(queued);
 }
 
 // Steps 1-4 for the treelet rooted at `root`.
@@ -234,6 +275,6 @@ fn optimize_treelet(root: u32) {
     if full_cost < current {
         write_back(root, best.x, full_cost);
     } else {
-        store_next_level(root);
+        store_root_next_level(root);
     }
 }

@@ -108,8 +108,10 @@ fn team_write_back(root: u32, team: u32, full_split: u32, full_cost: f32) {
         }
         let parts = array<u32, 2>(split, s ^ split);
         var child = array<u32, 2>(0u, 0u);
+        var code = vec2<u32>(0u);
         for (var k = 0u; k < 2u; k++) {
             let part = parts[k];
+            code[k] = child_code(part, queued);
             if countOneBits(part) == 1u {
                 child[k] = team_leaf_node[leaves + firstTrailingBit(part)];
             } else {
@@ -120,14 +122,16 @@ fn team_write_back(root: u32, team: u32, full_split: u32, full_cost: f32) {
             }
             parents[child[k]] = node;
         }
+        let prims = team_subset_prims(halves, s);
         nodes[node] = BvhNode(team_subset_min(halves, s), child[0], team_subset_max(halves, s), child[1]);
-        prim_counts[node] = team_subset_prims(halves, s);
+        prim_counts[node] = prims;
         costs[node] = cost;
+        written_node[head] = node;
+        written_prims[head] = prims;
+        written_children[head] = code;
     }
-    // Step 5 (treelet_dp.wgsl), children first.
-    for (var e = queued; e > 0u; e--) {
-        store_next_level(queue_node[e - 1u]);
-    }
+    // Step 5 (treelet_dp.wgsl), from lane 0's formation arrays.
+    store_next_levels(queued);
 }
 
 // Steps 1-4 for the treelet rooted at `root`, by the invocation in lane `lane` of team `team`.
@@ -249,7 +253,7 @@ fn optimize_treelet_team(root: u32, has_treelet: bool, team: u32, lane: u32) {
         if full_cost < current {
             team_write_back(root, team, full_split, full_cost);
         } else {
-            store_next_level(root);
+            store_root_next_level(root);
         }
     }
 }
