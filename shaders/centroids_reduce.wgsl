@@ -1,8 +1,9 @@
-// Scene centroid bounds by parallel reduction (LBVH stage 1, Karras 2012 §3). Each workgroup
-// reduces a tile of TILE elements to one box: `from_prims` reads the centroids of the primitive
-// boxes, `from_boxes` reduces the previous level's boxes. Levels repeat until one box remains.
-// min/max are exact, so the result is bit-identical to the CPU twin in any order.
-#include "aabb.wgsl"
+// Scene centroid bounds by parallel reduction (LBVH stage 1, Karras 2012 §3), in one dispatch:
+// each workgroup reduces a tile of TILE elements in workgroup memory and adds its box to the
+// eight box words with six atomicMax (box_words.wgsl). `from_prims` reads the centroids of the
+// primitive boxes, `from_boxes` the boxes themselves (the scene box). min/max are exact, so the
+// result is bit-identical to the CPU twin in any order.
+#include "box_words.wgsl"
 
 const WORKGROUP: u32 = 256u;
 const PER_INVOCATION: u32 = 4u;
@@ -17,15 +18,16 @@ struct ReduceParams {
 
 @group(0) @binding(0) var<uniform> params: ReduceParams;
 @group(0) @binding(1) var<storage, read> boxes_in: array<Aabb>;
-@group(0) @binding(2) var<storage, read_write> boxes_out: array<Aabb>;
+// The box words (box_words.wgsl), zeroed before the dispatch.
+@group(0) @binding(2) var<storage, read_write> box_words: array<atomic<u32>>;
 // The item count's limit (`gpu::ItemCount`): both entries reduce min(params.count,
-// count_limit[0]) items; tiles past them give the empty box.
+// count_limit[0]) items; tiles past them add nothing.
 @group(0) @binding(3) var<storage, read> count_limit: array<u32>;
 
 var<workgroup> shared_min: array<vec3<f32>, WORKGROUP>;
 var<workgroup> shared_max: array<vec3<f32>, WORKGROUP>;
 
-fn reduce_and_store(lid: u32, tile: u32, lo: vec3<f32>, hi: vec3<f32>) {
+fn reduce_and_store(lid: u32, lo: vec3<f32>, hi: vec3<f32>) {
     shared_min[lid] = lo;
     shared_max[lid] = hi;
     workgroupBarrier();
@@ -36,8 +38,15 @@ fn reduce_and_store(lid: u32, tile: u32, lo: vec3<f32>, hi: vec3<f32>) {
         }
         workgroupBarrier();
     }
-    if lid == 0u {
-        boxes_out[tile] = Aabb(shared_min[0], 0u, shared_max[0], 0u);
+    if lid == 0u && shared_min[0].x <= shared_max[0].x {
+        let lo = shared_min[0];
+        let hi = shared_max[0];
+        atomicMax(&box_words[0], order_bits(-lo.x));
+        atomicMax(&box_words[1], order_bits(-lo.y));
+        atomicMax(&box_words[2], order_bits(-lo.z));
+        atomicMax(&box_words[4], order_bits(hi.x));
+        atomicMax(&box_words[5], order_bits(hi.y));
+        atomicMax(&box_words[6], order_bits(hi.z));
     }
 }
 
@@ -59,7 +68,7 @@ fn from_prims(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) gr
             hi = max(hi, c);
         }
     }
-    reduce_and_store(lid, tile, lo, hi);
+    reduce_and_store(lid, lo, hi);
 }
 
 @compute @workgroup_size(WORKGROUP)
@@ -75,5 +84,5 @@ fn from_boxes(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) gr
             hi = max(hi, boxes_in[i].max);
         }
     }
-    reduce_and_store(lid, tile, lo, hi);
+    reduce_and_store(lid, lo, hi);
 }

@@ -5,7 +5,7 @@
 // high `params.key_bits` bits. The grid is cubic (cell size from the longest side), so thin axes do
 // not waste top-level splits. Keys are vec2<u32>(low 32 bits, high 32 bits).
 #include "constants.wgsl"
-#include "aabb.wgsl"
+#include "box_words.wgsl"
 
 // Rust twin: `MortonParams` (src/bvh/lbvh/morton_compute.rs).
 struct MortonParams {
@@ -18,8 +18,8 @@ struct MortonParams {
 
 @group(0) @binding(0) var<uniform> params: MortonParams;
 @group(0) @binding(1) var<storage, read> prim_boxes: array<Aabb>;
-// [0] holds the centroid bounds.
-@group(0) @binding(2) var<storage, read> centroid_bounds: array<Aabb>;
+// The centroid bounds as box words (box_words.wgsl).
+@group(0) @binding(2) var<storage, read> centroid_bounds: array<vec4<u32>>;
 @group(0) @binding(3) var<storage, read_write> keys: array<vec2<u32>>;
 @group(0) @binding(4) var<storage, read_write> values: array<u32>;
 // The item count's limit (`gpu::ItemCount`): the kernel works on min(params.count, count_limit[0]).
@@ -35,7 +35,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let c = (prim_boxes[i].min + prim_boxes[i].max) * 0.5;
-    let bounds = centroid_bounds[0];
+    let bounds = box_of_words(centroid_bounds[0], centroid_bounds[1]);
     let e = bounds.max - bounds.min;
     let extent = max(e.x, max(e.y, e.z));
     let scale = select(0.0, MORTON_GRID / extent, extent > 0.0);

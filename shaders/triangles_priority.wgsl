@@ -15,8 +15,8 @@
 // [0]: bits of the largest priority
 @group(0) @binding(3) var<storage, read_write> budget_state: array<atomic<u32>>;
 
-// [0]: the scene box
-@group(0) @binding(4) var<storage, read> scene_bounds: array<Aabb>;
+// The scene box as box words (box_words.wgsl).
+@group(0) @binding(4) var<storage, read> scene_bounds: array<vec4<u32>>;
 
 #include "split_grid.wgsl"
 

@@ -26,8 +26,8 @@
 @group(0) @binding(5) var<storage, read_write> prim_boxes: array<Aabb>;
 @group(0) @binding(6) var<storage, read_write> ref_tris: array<u32>;
 
-// [0]: the scene box
-@group(0) @binding(7) var<storage, read> scene_bounds: array<Aabb>;
+// The scene box as box words (box_words.wgsl).
+@group(0) @binding(7) var<storage, read> scene_bounds: array<vec4<u32>>;
 
 // The first reference of triangle i.
 fn first_reference(i: u32) -> u32 {

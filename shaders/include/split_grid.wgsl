@@ -1,8 +1,9 @@
 // The Morton grid of triangle pre-splitting (Karras & Aila 2013, §5): a cubic grid of 2^21 cells
 // per axis over the scene box (cell size from its longest side, as the LBVH keys). The including
-// kernel declares `scene_bounds` (the scene box at [0], from the box reduction).
+// kernel declares `scene_bounds: array<vec4<u32>>` (the scene box's words, box_words.wgsl).
 
 #include "constants.wgsl"
+#include "box_words.wgsl"
 const NO_BIT: u32 = 0xffffffffu;
 
 struct SplitGrid {
@@ -13,7 +14,7 @@ struct SplitGrid {
 }
 
 fn split_grid() -> SplitGrid {
-    let b = scene_bounds[0];
+    let b = box_of_words(scene_bounds[0], scene_bounds[1]);
     let e = b.max - b.min;
     let extent = max(e.x, max(e.y, e.z));
     if extent > 0.0 {

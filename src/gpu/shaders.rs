@@ -22,6 +22,10 @@ const INCLUDES: &[(&str, &str)] = &[
     ),
     ("aabb.wgsl", include_str!("../../shaders/include/aabb.wgsl")),
     (
+        "box_words.wgsl",
+        include_str!("../../shaders/include/box_words.wgsl"),
+    ),
+    (
         "node_words.wgsl",
         include_str!("../../shaders/include/node_words.wgsl"),
     ),

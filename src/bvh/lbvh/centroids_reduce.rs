@@ -3,6 +3,8 @@
 
 use bytemuck::{Pod, Zeroable};
 
+use glam::Vec3;
+
 use crate::geometry::Aabb;
 use crate::gpu::{kernel, storage_buffer_zeroed, GpuContext, Grid, ItemCount, Kernel, Pass};
 use crate::Result;
@@ -18,11 +20,11 @@ pub struct ReduceParams {
 }
 
 kernel!(
-    /// First level: the centroids of primitive boxes.
+    /// The bounds of the primitive boxes' centroids.
     pub CENTROIDS_FROM_PRIMS: ReduceParams = "centroids_reduce"::"from_prims", [256, 1, 1], [Read, ReadWrite, Read]
 );
 kernel!(
-    /// Further levels (and the scene box from primitive boxes): boxes.
+    /// The scene box from primitive boxes.
     pub CENTROIDS_FROM_BOXES: ReduceParams = "centroids_reduce"::"from_boxes", [256, 1, 1], [Read, ReadWrite, Read]
 );
 
@@ -33,7 +35,8 @@ pub fn centroid_bounds_cpu(prim_boxes: &[Aabb]) -> Aabb {
         .fold(Aabb::EMPTY, |b, p| b.grow(p.centroid()))
 }
 
-/// The kernel `centroids_reduce`: a reduction of boxes (or their centroids) to one box.
+/// The kernel `centroids_reduce`: a reduction of boxes (or their centroids) to one box, in one
+/// dispatch.
 pub struct CentroidsReduce {
     from_prims: Kernel<ReduceParams>,
     from_boxes: Kernel<ReduceParams>,
@@ -47,60 +50,57 @@ impl CentroidsReduce {
         }
     }
 
-    /// Boxes written by each reduction level for `count` elements (the last level writes one).
-    fn level_sizes(count: u32) -> Vec<u32> {
-        let mut sizes = vec![count.div_ceil(TILE).max(1)];
-        while let Some(&last) = sizes.last().filter(|&&s| s > 1) {
-            sizes.push(last.div_ceil(TILE));
-        }
-        sizes
-    }
-
-    /// Number of reduction levels for `count` elements.
-    pub fn level_count(count: u32) -> usize {
-        Self::level_sizes(count).len()
-    }
-
-    /// Scratch buffers for reducing up to `count` primitives: one per level.
-    pub fn level_buffers(ctx: &GpuContext, count: u32) -> Result<Vec<wgpu::Buffer>> {
-        Self::level_sizes(count)
-            .into_iter()
-            .map(|boxes| storage_buffer_zeroed(ctx, "centroid bounds level", u64::from(boxes) * 32))
-            .collect()
+    /// The eight box words a reduction adds into (`box_words.wgsl`; zero them before each).
+    pub fn box_buffer(ctx: &GpuContext) -> Result<wgpu::Buffer> {
+        storage_buffer_zeroed(ctx, "box words", 32)
     }
 
     /// Records the reduction of the boxes' centroids (or of the boxes themselves, when
-    /// `of_centroids` is false); the bounds end up in box 0 of `levels.last()`.
+    /// `of_centroids` is false) into `box_words`, zeroed beforehand: one dispatch.
     pub fn record(
         &self,
         pass: &mut Pass<'_>,
         prim_boxes: &wgpu::Buffer,
         count: ItemCount<'_>,
-        levels: &[wgpu::Buffer],
+        box_words: &wgpu::Buffer,
         of_centroids: bool,
     ) {
         let ctx = pass.ctx();
-        let mut remaining = count.capacity();
-        for (level, output) in levels.iter().enumerate() {
-            let (kernel, input) = match level {
-                0 if of_centroids => (&self.from_prims, prim_boxes),
-                0 => (&self.from_boxes, prim_boxes),
-                _ => (&self.from_boxes, &levels[level - 1]),
-            };
-            let tiles = remaining.div_ceil(TILE).max(1);
-            let grid = Grid::items(ctx, tiles, 1);
-            let params = ReduceParams {
-                count: remaining,
-                _pad: [0; 3],
-            };
-            // Only the first level's item count can be on the GPU.
-            let limit = if level == 0 {
-                count.limit(ctx)
-            } else {
-                &ctx.no_count_limit
-            };
-            pass.dispatch(kernel, grid, &params, &[input, output, limit]);
-            remaining = tiles;
-        }
+        let kernel = if of_centroids {
+            &self.from_prims
+        } else {
+            &self.from_boxes
+        };
+        let tiles = count.capacity().div_ceil(TILE).max(1);
+        let params = ReduceParams {
+            count: count.capacity(),
+            _pad: [0; 3],
+        };
+        let limit = count.limit(ctx);
+        pass.dispatch(
+            kernel,
+            Grid::items(ctx, tiles, 1),
+            &params,
+            &[prim_boxes, box_words, limit],
+        );
     }
+}
+
+/// CPU twin of `box_words.wgsl`'s `box_of_words`: the box the eight words of a reduction hold.
+pub fn box_of_words(words: &[u32]) -> Aabb {
+    let from_order_bits = |u: u32| {
+        f32::from_bits(if u & 0x8000_0000 != 0 {
+            u & 0x7fff_ffff
+        } else {
+            !u
+        })
+    };
+    let axes = |first: usize| {
+        Vec3::new(
+            from_order_bits(words[first]),
+            from_order_bits(words[first + 1]),
+            from_order_bits(words[first + 2]),
+        )
+    };
+    Aabb::new(-axes(0), axes(4))
 }

@@ -14,7 +14,7 @@ mod triangles_bounds;
 
 pub use bounds_refit::{assemble_lbvh_cpu, BOUNDS_REFIT};
 pub use centroids_reduce::{
-    centroid_bounds_cpu, CentroidsReduce, CENTROIDS_FROM_BOXES, CENTROIDS_FROM_PRIMS,
+    box_of_words, centroid_bounds_cpu, CentroidsReduce, CENTROIDS_FROM_BOXES, CENTROIDS_FROM_PRIMS,
 };
 pub use lbvh_hierarchy::{hierarchy_cpu, Hierarchy, LBVH_HIERARCHY};
 pub use morton_compute::{
@@ -26,7 +26,7 @@ use bounds_refit::BoundsRefit;
 use lbvh_hierarchy::LbvhHierarchy;
 use morton_compute::MortonCompute;
 
-use super::{Bvh, BvhNode};
+use super::Bvh;
 use crate::device::{Geometry, Tree};
 use crate::geometry::Aabb;
 use crate::gpu::{
@@ -94,7 +94,8 @@ pub struct LbvhStages {
 struct Scratch {
     capacity: u32,
     prim_boxes: wgpu::Buffer,
-    bounds_levels: Vec<wgpu::Buffer>,
+    /// The centroid bounds, as the reduction's box words.
+    centroid_box: wgpu::Buffer,
     keys: wgpu::Buffer,
     parents: wgpu::Buffer,
     arrivals: wgpu::Buffer,
@@ -228,7 +229,7 @@ impl LbvhBuilder {
             self.scratch = Some(Scratch {
                 capacity,
                 prim_boxes: storage_buffer_zeroed(ctx, "prim boxes", n * 32)?,
-                bounds_levels: CentroidsReduce::level_buffers(ctx, capacity)?,
+                centroid_box: CentroidsReduce::box_buffer(ctx)?,
                 keys: storage_buffer_zeroed(ctx, "morton keys", n * 8)?,
                 parents: storage_buffer_zeroed(ctx, "parents", (2 * n - 1) * 4)?,
                 arrivals: storage_buffer_zeroed(ctx, "arrival counters", n * 4)?,
@@ -262,8 +263,7 @@ impl LbvhBuilder {
         self.record_keys(&mut rec, input, &tree.prim_indices);
         rec.submit();
         let scratch = self.scratch.as_ref().expect("reserved");
-        let bounds_node: Vec<BvhNode> =
-            read_buffer(ctx, scratch.bounds_levels.last().expect("one level"), 1)?;
+        let box_words: Vec<u32> = read_buffer(ctx, &scratch.centroid_box, 8)?;
         let keys = read_keys(ctx, &scratch.keys, n)?;
         let mut rec = Recorder::new(ctx, &mut params, None);
         self.record_hierarchy(&mut rec, input.count(), &tree.nodes, &tree.prim_indices)?;
@@ -272,7 +272,7 @@ impl LbvhBuilder {
         let scratch = self.scratch.as_ref().expect("reserved");
         let sorted_prims: Vec<u32> = read_buffer(ctx, &tree.prim_indices, n as usize)?;
         Ok(LbvhStages {
-            centroid_bounds: bounds_node[0].bounds(),
+            centroid_bounds: box_of_words(&box_words),
             keys,
             sorted_keys: read_keys(ctx, &scratch.keys, n)?,
             parents: read_buffer(ctx, &scratch.parents, 2 * n as usize - 1)?,
@@ -289,25 +289,27 @@ impl LbvhBuilder {
     fn record_keys(&self, rec: &mut Recorder<'_>, input: LbvhInput<'_>, order: &wgpu::Buffer) {
         let count = input.count();
         let scratch = self.scratch.as_ref().expect("reserved");
-        // The level buffers are sized for the scratch capacity; reduce over the levels the count's
-        // capacity needs.
-        let levels = CentroidsReduce::level_count(count.capacity());
-        let bounds_levels = &scratch.bounds_levels[..levels];
+        rec.encoder().clear_buffer(&scratch.centroid_box, 0, None);
         {
             let mut pass = rec.pass("bounds");
             if let LbvhInput::Triangles { buffer, count } = input {
                 self.triangles_bounds
                     .record(&mut pass, buffer, count, &scratch.prim_boxes);
             }
-            self.centroids
-                .record(&mut pass, &scratch.prim_boxes, count, bounds_levels, true);
+            self.centroids.record(
+                &mut pass,
+                &scratch.prim_boxes,
+                count,
+                &scratch.centroid_box,
+                true,
+            );
         }
         let mut pass = rec.pass("morton");
         self.morton.record(
             &mut pass,
             &scratch.prim_boxes,
             count,
-            &bounds_levels[levels - 1],
+            &scratch.centroid_box,
             &scratch.keys,
             order,
         );

@@ -52,7 +52,8 @@ pub struct SplitStages {
 struct Scratch {
     capacity: u32,
     tri_boxes: wgpu::Buffer,
-    bounds_levels: Vec<wgpu::Buffer>,
+    /// The scene box, as the reduction's box words.
+    scene_box: wgpu::Buffer,
     priorities: wgpu::Buffer,
     budget_state: wgpu::Buffer,
     ref_offsets: wgpu::Buffer,
@@ -110,7 +111,7 @@ impl PreSplitter {
             self.scratch = Some(Scratch {
                 capacity: n,
                 tri_boxes: storage_buffer_zeroed(ctx, "triangle boxes", u64::from(n) * 32)?,
-                bounds_levels: CentroidsReduce::level_buffers(ctx, n)?,
+                scene_box: CentroidsReduce::box_buffer(ctx)?,
                 priorities: storage_buffer_zeroed(ctx, "split priorities", u64::from(n) * 4)?,
                 budget_state: storage_buffer_zeroed(
                     ctx,
@@ -135,8 +136,7 @@ impl PreSplitter {
         self.scan.reserve(ctx, n, 1)?;
         let s = self.scratch.as_ref().expect("allocated");
         let ref_tris = self.ref_tris.as_ref().expect("allocated");
-        let levels = CentroidsReduce::level_count(n);
-        let scene_box = &s.bounds_levels[levels - 1];
+        let scene_box = &s.scene_box;
         let grid = self.priority.grid(ctx, n);
         let mut budget_params = BudgetParams {
             count: n,
@@ -146,6 +146,7 @@ impl PreSplitter {
         };
         let budget_buffers = [&s.priorities, &s.budget_state, &s.ref_offsets];
         rec.encoder().clear_buffer(&s.budget_state, 0, None);
+        rec.encoder().clear_buffer(scene_box, 0, None);
         {
             let mut pass = rec.pass("split counts");
             self.triangle_bounds
@@ -154,7 +155,7 @@ impl PreSplitter {
                 &mut pass,
                 &s.tri_boxes,
                 ItemCount::Known(n),
-                &s.bounds_levels[..levels],
+                scene_box,
                 false,
             );
             pass.dispatch(
