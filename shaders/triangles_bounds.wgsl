@@ -1,19 +1,54 @@
 // Primitive boxes for the BVH build: one AABB per triangle (the input of LBVH stage 1 when no
-// triangle is pre-split; pre-splitting writes several clipped boxes per triangle instead).
+// triangle is pre-split; pre-splitting writes several clipped boxes per triangle instead), and in
+// the same dispatch their reduction to one box (box_reduce.wgsl): the bounds of the boxes'
+// centroids, which the LBVH's Morton grid spans (params.centroids = 1), or of the boxes
+// themselves, the scene box that pre-splitting's grid spans (0). Each workgroup takes a tile of
+// TILE triangles.
 #include "bvh_node.wgsl"
-#include "aabb.wgsl"
-#include "items.wgsl"
+#include "box_words.wgsl"
 
-@group(0) @binding(0) var<uniform> params: Items;
+const WORKGROUP: u32 = 256u;
+const PER_INVOCATION: u32 = 4u;
+const TILE: u32 = 1024u;
+
+// Rust twin: `TriangleBoundsParams` (src/bvh/lbvh/triangles_bounds.rs).
+struct TriangleBoundsParams {
+    count: u32,
+    // 1: reduce the centroids, 0: the boxes.
+    centroids: u32,
+    pad0: u32,
+    pad1: u32,
+}
+
+@group(0) @binding(0) var<uniform> params: TriangleBoundsParams;
 @group(0) @binding(1) var<storage, read> triangles: array<Triangle>;
 @group(0) @binding(2) var<storage, read_write> prim_boxes: array<Aabb>;
+// The box words (box_words.wgsl), zeroed before the dispatch.
+@group(0) @binding(3) var<storage, read_write> box_words: array<atomic<u32>>;
 
-@compute @workgroup_size(64)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x + gid.y * params.row_pitch;
-    if i >= params.count {
-        return;
+#include "box_reduce.wgsl"
+
+@compute @workgroup_size(WORKGROUP)
+fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let tile = wid.x + wid.y * groups.x;
+    var lo = vec3<f32>(F32_MAX);
+    var hi = vec3<f32>(-F32_MAX);
+    for (var k = 0u; k < PER_INVOCATION; k++) {
+        let i = tile * TILE + k * WORKGROUP + lid;
+        if i < params.count {
+            let t = triangles[i];
+            let box_min = min(t.v0, min(t.v1, t.v2));
+            let box_max = max(t.v0, max(t.v1, t.v2));
+            prim_boxes[i] = Aabb(box_min, 0u, box_max, 0u);
+            if params.centroids != 0u {
+                let c = (box_min + box_max) * 0.5;
+                lo = min(lo, c);
+                hi = max(hi, c);
+            } else {
+                lo = min(lo, box_min);
+                hi = max(hi, box_max);
+            }
+        }
     }
-    let t = triangles[i];
-    prim_boxes[i] = Aabb(min(t.v0, min(t.v1, t.v2)), 0u, max(t.v0, max(t.v1, t.v2)), 0u);
+    add_to_box_words(lid, lo, hi);
 }

@@ -8,8 +8,7 @@ use crate::{anim, bvh, sort, trace};
 /// Each kernel's declaration (see `gpu::KernelDecl`).
 pub const ALL: &[&KernelInfo] = &[
     &bvh::lbvh::TRIANGLES_BOUNDS.info,
-    &bvh::lbvh::CENTROIDS_FROM_PRIMS.info,
-    &bvh::lbvh::CENTROIDS_FROM_BOXES.info,
+    &bvh::lbvh::CENTROIDS_REDUCE.info,
     &bvh::lbvh::MORTON_COMPUTE.info,
     &bvh::lbvh::LBVH_HIERARCHY.info,
     &bvh::lbvh::BOUNDS_REFIT.info,

@@ -26,6 +26,10 @@ const INCLUDES: &[(&str, &str)] = &[
         include_str!("../../shaders/include/box_words.wgsl"),
     ),
     (
+        "box_reduce.wgsl",
+        include_str!("../../shaders/include/box_reduce.wgsl"),
+    ),
+    (
         "node_words.wgsl",
         include_str!("../../shaders/include/node_words.wgsl"),
     ),

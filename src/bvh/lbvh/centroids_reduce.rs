@@ -19,14 +19,7 @@ pub struct ReduceParams {
     _pad: [u32; 3],
 }
 
-kernel!(
-    /// The bounds of the primitive boxes' centroids.
-    pub CENTROIDS_FROM_PRIMS: ReduceParams = "centroids_reduce"::"from_prims", [256, 1, 1], [Read, ReadWrite, Read]
-);
-kernel!(
-    /// The scene box from primitive boxes.
-    pub CENTROIDS_FROM_BOXES: ReduceParams = "centroids_reduce"::"from_boxes", [256, 1, 1], [Read, ReadWrite, Read]
-);
+kernel!(pub CENTROIDS_REDUCE: ReduceParams = "centroids_reduce"::"main", [256, 1, 1], [Read, ReadWrite, Read]);
 
 /// CPU twin: bounds of the primitive boxes' centroids.
 pub fn centroid_bounds_cpu(prim_boxes: &[Aabb]) -> Aabb {
@@ -35,18 +28,17 @@ pub fn centroid_bounds_cpu(prim_boxes: &[Aabb]) -> Aabb {
         .fold(Aabb::EMPTY, |b, p| b.grow(p.centroid()))
 }
 
-/// The kernel `centroids_reduce`: a reduction of boxes (or their centroids) to one box, in one
-/// dispatch.
+/// The kernel `centroids_reduce`: the bounds of primitive boxes' centroids in one dispatch (for
+/// boxes that are not the triangles': `TrianglesBounds` reduces the triangles' as it computes
+/// them).
 pub struct CentroidsReduce {
-    from_prims: Kernel<ReduceParams>,
-    from_boxes: Kernel<ReduceParams>,
+    kernel: Kernel<ReduceParams>,
 }
 
 impl CentroidsReduce {
     pub fn new(ctx: &GpuContext) -> Self {
         Self {
-            from_prims: Kernel::new(ctx, &CENTROIDS_FROM_PRIMS),
-            from_boxes: Kernel::new(ctx, &CENTROIDS_FROM_BOXES),
+            kernel: Kernel::new(ctx, &CENTROIDS_REDUCE),
         }
     }
 
@@ -55,22 +47,15 @@ impl CentroidsReduce {
         storage_buffer_zeroed(ctx, "box words", 32)
     }
 
-    /// Records the reduction of the boxes' centroids (or of the boxes themselves, when
-    /// `of_centroids` is false) into `box_words`, zeroed beforehand: one dispatch.
+    /// Records the reduction of the boxes' centroids into `box_words`, zeroed beforehand.
     pub fn record(
         &self,
         pass: &mut Pass<'_>,
         prim_boxes: &wgpu::Buffer,
         count: ItemCount<'_>,
         box_words: &wgpu::Buffer,
-        of_centroids: bool,
     ) {
         let ctx = pass.ctx();
-        let kernel = if of_centroids {
-            &self.from_prims
-        } else {
-            &self.from_boxes
-        };
         let tiles = count.capacity().div_ceil(TILE).max(1);
         let params = ReduceParams {
             count: count.capacity(),
@@ -78,7 +63,7 @@ impl CentroidsReduce {
         };
         let limit = count.limit(ctx);
         pass.dispatch(
-            kernel,
+            &self.kernel,
             Grid::items(ctx, tiles, 1),
             &params,
             &[prim_boxes, box_words, limit],

@@ -13,14 +13,12 @@ mod morton_compute;
 mod triangles_bounds;
 
 pub use bounds_refit::{assemble_lbvh_cpu, BOUNDS_REFIT};
-pub use centroids_reduce::{
-    box_of_words, centroid_bounds_cpu, CentroidsReduce, CENTROIDS_FROM_BOXES, CENTROIDS_FROM_PRIMS,
-};
+pub use centroids_reduce::{box_of_words, centroid_bounds_cpu, CentroidsReduce, CENTROIDS_REDUCE};
 pub use lbvh_hierarchy::{hierarchy_cpu, Hierarchy, LBVH_HIERARCHY};
 pub use morton_compute::{
     morton_key, morton_keys_cpu, LBVH_KEY_BITS, MORTON_BITS, MORTON_COMPUTE, TRBVH_KEY_BITS,
 };
-pub use triangles_bounds::{prim_boxes_cpu, TrianglesBounds, TRIANGLES_BOUNDS};
+pub use triangles_bounds::{prim_boxes_cpu, BoundsOf, TrianglesBounds, TRIANGLES_BOUNDS};
 
 use bounds_refit::BoundsRefit;
 use lbvh_hierarchy::LbvhHierarchy;
@@ -292,17 +290,22 @@ impl LbvhBuilder {
         rec.encoder().clear_buffer(&scratch.centroid_box, 0, None);
         {
             let mut pass = rec.pass("bounds");
-            if let LbvhInput::Triangles { buffer, count } = input {
-                self.triangles_bounds
-                    .record(&mut pass, buffer, count, &scratch.prim_boxes);
+            match input {
+                LbvhInput::Triangles { buffer, count } => self.triangles_bounds.record(
+                    &mut pass,
+                    buffer,
+                    count,
+                    &scratch.prim_boxes,
+                    &scratch.centroid_box,
+                    BoundsOf::Centroids,
+                ),
+                LbvhInput::PrimBoxes(count) => self.centroids.record(
+                    &mut pass,
+                    &scratch.prim_boxes,
+                    count,
+                    &scratch.centroid_box,
+                ),
             }
-            self.centroids.record(
-                &mut pass,
-                &scratch.prim_boxes,
-                count,
-                &scratch.centroid_box,
-                true,
-            );
         }
         let mut pass = rec.pass("morton");
         self.morton.record(

@@ -24,12 +24,12 @@ pub use triangles_split::TRIANGLES_SPLIT;
 
 use splits_count::BudgetParams;
 
-use super::lbvh::{CentroidsReduce, TrianglesBounds};
+use super::lbvh::{BoundsOf, CentroidsReduce, TrianglesBounds};
 use crate::device::Geometry;
 use crate::geometry::GpuAabb;
 use crate::gpu::constants::{SPLIT_SCALE_WORD, SPLIT_SEARCH_STEPS};
 use crate::gpu::{
-    read_buffer, storage_buffer_zeroed, GpuContext, ItemCount, Items, Kernel, ParamSlab, Recorder,
+    read_buffer, storage_buffer_zeroed, GpuContext, Items, Kernel, ParamSlab, Recorder,
 };
 use crate::sort::PrefixScan;
 use crate::Result;
@@ -62,7 +62,6 @@ struct Scratch {
 /// Kernels and scratch of the pre-splitting stage, reused per frame.
 pub struct PreSplitter {
     triangle_bounds: TrianglesBounds,
-    scene_bounds: CentroidsReduce,
     priority: Kernel<Items>,
     count_splits: Kernel<BudgetParams>,
     assign_splits: Kernel<BudgetParams>,
@@ -76,7 +75,6 @@ impl PreSplitter {
     pub fn new(ctx: &GpuContext) -> Self {
         Self {
             triangle_bounds: TrianglesBounds::new(ctx),
-            scene_bounds: CentroidsReduce::new(ctx),
             priority: Kernel::new(ctx, &TRIANGLES_PRIORITY),
             count_splits: Kernel::new(ctx, &SPLITS_COUNT),
             assign_splits: Kernel::new(ctx, &SPLITS_ASSIGN),
@@ -149,14 +147,13 @@ impl PreSplitter {
         rec.encoder().clear_buffer(scene_box, 0, None);
         {
             let mut pass = rec.pass("split counts");
-            self.triangle_bounds
-                .record(&mut pass, &geometry.triangles, n, &s.tri_boxes);
-            self.scene_bounds.record(
+            self.triangle_bounds.record(
                 &mut pass,
+                &geometry.triangles,
+                n,
                 &s.tri_boxes,
-                ItemCount::Known(n),
                 scene_box,
-                false,
+                BoundsOf::Boxes,
             );
             pass.dispatch(
                 &self.priority,
