@@ -1,12 +1,15 @@
 //! GPU treelet restructuring rounds (Karras & Aila 2013, §3-4), processed level by level. A round
-//! schedules the tree (kernel `nodes_level`: counts, costs and each treelet root's level, a
-//! bottom-up climb), buckets the roots by level (`roots_bucket`), optimizes each of the lowest
-//! levels in one indirect dispatch (`treelets_optimize`), and climbs the remaining top levels in
-//! one workgroup (`treelets_climb`). Roots of one level are disjoint subtrees, and every level is
-//! processed after the levels below it, so the result is the one of the paper's bottom-up
-//! traversal: the CPU twin `WorkingTree::optimize_round` processes the nodes in post-order.
-//! Dispatch boundaries order memory, so the treelet kernels read and write node data with plain
-//! loads and stores, not atomics.
+//! schedules the tree (kernel `nodes_level`: in the first round a bottom-up climb that gives the
+//! LBVH its boxes and every node its count, cost and treelet level; in later rounds a count of
+//! the roots per level, whose levels the round before computed), buckets the roots by level
+//! (`roots_bucket`), optimizes each of the lowest levels in one indirect dispatch
+//! (`treelets_optimize`), and climbs the remaining top levels in one workgroup
+//! (`treelets_climb`). The treelet kernels also compute the next round's levels of the nodes
+//! they finish. Roots of one level are disjoint subtrees, and every level is processed after the
+//! levels below it, so the result is the one of the paper's bottom-up traversal: the CPU twin
+//! `WorkingTree::optimize_round` processes the nodes in post-order. Dispatch boundaries order
+//! memory, so the treelet kernels read and write node data with plain loads and stores, not
+//! atomics.
 //!
 //! Who optimizes a treelet: a level (or a climbed wave) of many treelets gives each its own
 //! invocation, which runs the whole DP alone (throughput); a level of fewer than `team_below`
@@ -73,7 +76,8 @@ pub(crate) struct TreeletState<'a> {
     /// every node they finish); a node below γ has no level.
     pub levels: &'a wgpu::Buffer,
     pub next_levels: &'a wgpu::Buffer,
-    /// Arrival counters of the internal nodes (n words), zeroed before each round.
+    /// Arrival counters of the internal nodes (n words): zeroed before the first round's climb,
+    /// and by `roots_bucket` for each round's treelet climb.
     pub arrivals: &'a wgpu::Buffer,
     /// `SCHEDULE_WORDS` words (storage and indirect), zeroed before each round.
     pub schedule: &'a wgpu::Buffer,
