@@ -1,9 +1,9 @@
-// Primitive boxes for the BVH build: one AABB per triangle (the input of LBVH stage 1 when no
-// triangle is pre-split; pre-splitting writes several clipped boxes per triangle instead), and in
-// the same dispatch their reduction to one box (box_reduce.wgsl): the bounds of the boxes'
-// centroids, which the LBVH's Morton grid spans (params.centroids = 1), or of the boxes
-// themselves, the scene box that pre-splitting's grid spans (0). Each workgroup takes a tile of
-// TILE triangles.
+// The triangles' boxes reduced to one box (box_reduce.wgsl), in one dispatch: with
+// params.lbvh_input = 1, the primitive boxes of the BVH build, one AABB per triangle (the input of
+// LBVH stage 1 when no triangle is pre-split; pre-splitting writes several clipped boxes per
+// triangle instead), and the bounds of their centroids, which the LBVH's Morton grid spans; with
+// 0, only the scene box, which pre-splitting's grid spans. Each workgroup takes a tile of TILE
+// triangles.
 #include "bvh_node.wgsl"
 #include "box_words.wgsl"
 
@@ -14,14 +14,15 @@ const TILE: u32 = 1024u;
 // Rust twin: `TriangleBoundsParams` (src/bvh/lbvh/triangles_bounds.rs).
 struct TriangleBoundsParams {
     count: u32,
-    // 1: reduce the centroids, 0: the boxes.
-    centroids: u32,
+    // 1: write the boxes and reduce their centroids, 0: reduce the boxes.
+    lbvh_input: u32,
     pad0: u32,
     pad1: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: TriangleBoundsParams;
 @group(0) @binding(1) var<storage, read> triangles: array<Triangle>;
+// LBVH input only (else a placeholder).
 @group(0) @binding(2) var<storage, read_write> prim_boxes: array<Aabb>;
 // The box words (box_words.wgsl), zeroed before the dispatch.
 @group(0) @binding(3) var<storage, read_write> box_words: array<atomic<u32>>;
@@ -39,8 +40,8 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: 
             let t = triangles[i];
             let box_min = min(t.v0, min(t.v1, t.v2));
             let box_max = max(t.v0, max(t.v1, t.v2));
-            prim_boxes[i] = Aabb(box_min, 0u, box_max, 0u);
-            if params.centroids != 0u {
+            if params.lbvh_input != 0u {
+                prim_boxes[i] = Aabb(box_min, 0u, box_max, 0u);
                 let c = (box_min + box_max) * 0.5;
                 lo = min(lo, c);
                 hi = max(hi, c);

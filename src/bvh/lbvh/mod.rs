@@ -18,7 +18,9 @@ pub use lbvh_hierarchy::{hierarchy_cpu, Hierarchy, LBVH_HIERARCHY};
 pub use morton_compute::{
     morton_key, morton_keys_cpu, LBVH_KEY_BITS, MORTON_BITS, MORTON_COMPUTE, TRBVH_KEY_BITS,
 };
-pub use triangles_bounds::{prim_boxes_cpu, BoundsOf, TrianglesBounds, TRIANGLES_BOUNDS};
+pub use triangles_bounds::{
+    prim_boxes_cpu, TriangleBoundsOutput, TrianglesBounds, TRIANGLES_BOUNDS,
+};
 
 use bounds_refit::BoundsRefit;
 use lbvh_hierarchy::LbvhHierarchy;
@@ -295,9 +297,8 @@ impl LbvhBuilder {
                     &mut pass,
                     buffer,
                     count,
-                    &scratch.prim_boxes,
+                    TriangleBoundsOutput::LbvhInput(&scratch.prim_boxes),
                     &scratch.centroid_box,
-                    BoundsOf::Centroids,
                 ),
                 LbvhInput::PrimBoxes(count) => self.centroids.record(
                     &mut pass,

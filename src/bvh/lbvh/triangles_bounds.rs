@@ -1,7 +1,7 @@
 //! LBVH stages 0-1 for triangles: one primitive box per triangle and, in the same dispatch, the
-//! bounds of their centroids (Karras 2012 §4: the Morton grid spans them) or of the boxes
-//! themselves (pre-splitting's scene box), reduced into box words (kernel `triangles_bounds`);
-//! and the CPU twin of the boxes. The build runs over primitive boxes so that pre-split
+//! bounds of their centroids (Karras 2012 §4: the Morton grid spans them), reduced into box words
+//! (kernel `triangles_bounds`); or only the scene box (pre-splitting's grid spans it); and the CPU
+//! twin of the boxes. The build runs over primitive boxes so that pre-split
 //! references (several clipped boxes per triangle) go through the same stages.
 
 use bytemuck::{Pod, Zeroable};
@@ -18,7 +18,7 @@ const TILE: u32 = 1024;
 #[derive(Clone, Copy, Pod, Zeroable)]
 pub struct TriangleBoundsParams {
     count: u32,
-    centroids: u32,
+    lbvh_input: u32,
     _pad: [u32; 2],
 }
 const _: () = assert!(std::mem::size_of::<TriangleBoundsParams>() == 16);
@@ -31,13 +31,14 @@ pub fn prim_boxes_cpu(triangles: &[Triangle]) -> Vec<Aabb> {
     triangles.iter().map(Triangle::bounds).collect()
 }
 
-/// What the triangles' boxes are reduced to.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum BoundsOf {
-    /// The boxes' centroids (the LBVH's Morton grid).
-    Centroids,
-    /// The boxes (the scene box).
-    Boxes,
+/// What `TrianglesBounds` computes.
+#[derive(Clone, Copy)]
+pub enum TriangleBoundsOutput<'a> {
+    /// The LBVH's input: every triangle's box into the buffer, and the bounds of their centroids.
+    LbvhInput(&'a wgpu::Buffer),
+    /// Only the box of all triangles (the scene box); the buffer (any storage buffer) is bound
+    /// in the boxes' place and never written.
+    SceneBox(&'a wgpu::Buffer),
 }
 
 /// The kernel `triangles_bounds`.
@@ -52,21 +53,24 @@ impl TrianglesBounds {
         }
     }
 
-    /// Records `prim_boxes[i] = bounds(triangles[i])` for `count` triangles and the reduction of
-    /// `of` into `box_words` (zeroed beforehand; `lbvh::box_of_words` reads them).
+    /// Records `output` for `count` triangles, the reduced box into `box_words` (zeroed
+    /// beforehand; `lbvh::box_of_words` reads them).
     pub fn record(
         &self,
         pass: &mut Pass<'_>,
         triangles: &wgpu::Buffer,
         count: u32,
-        prim_boxes: &wgpu::Buffer,
+        output: TriangleBoundsOutput<'_>,
         box_words: &wgpu::Buffer,
-        of: BoundsOf,
     ) {
         let ctx = pass.ctx();
+        let (prim_boxes, lbvh_input) = match output {
+            TriangleBoundsOutput::LbvhInput(boxes) => (boxes, 1),
+            TriangleBoundsOutput::SceneBox(placeholder) => (placeholder, 0),
+        };
         let params = TriangleBoundsParams {
             count,
-            centroids: u32::from(of == BoundsOf::Centroids),
+            lbvh_input,
             _pad: [0; 2],
         };
         pass.dispatch(

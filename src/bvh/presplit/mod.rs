@@ -24,7 +24,7 @@ pub use triangles_split::TRIANGLES_SPLIT;
 
 use splits_count::BudgetParams;
 
-use super::lbvh::{BoundsOf, CentroidsReduce, TrianglesBounds};
+use super::lbvh::{CentroidsReduce, TriangleBoundsOutput, TrianglesBounds};
 use crate::device::Geometry;
 use crate::geometry::GpuAabb;
 use crate::gpu::constants::{SPLIT_SCALE_WORD, SPLIT_SEARCH_STEPS};
@@ -51,9 +51,10 @@ pub struct SplitStages {
 
 struct Scratch {
     capacity: u32,
-    tri_boxes: wgpu::Buffer,
     /// The scene box, as the reduction's box words.
     scene_box: wgpu::Buffer,
+    /// Bound in the place of triangle boxes, which the scene box needs none of.
+    no_boxes: wgpu::Buffer,
     priorities: wgpu::Buffer,
     budget_state: wgpu::Buffer,
     ref_offsets: wgpu::Buffer,
@@ -108,8 +109,8 @@ impl PreSplitter {
             self.scratch = None;
             self.scratch = Some(Scratch {
                 capacity: n,
-                tri_boxes: storage_buffer_zeroed(ctx, "triangle boxes", u64::from(n) * 32)?,
                 scene_box: CentroidsReduce::box_buffer(ctx)?,
+                no_boxes: storage_buffer_zeroed(ctx, "no triangle boxes", 32)?,
                 priorities: storage_buffer_zeroed(ctx, "split priorities", u64::from(n) * 4)?,
                 budget_state: storage_buffer_zeroed(
                     ctx,
@@ -151,9 +152,8 @@ impl PreSplitter {
                 &mut pass,
                 &geometry.triangles,
                 n,
-                &s.tri_boxes,
+                TriangleBoundsOutput::SceneBox(&s.no_boxes),
                 scene_box,
-                BoundsOf::Boxes,
             );
             pass.dispatch(
                 &self.priority,
