@@ -1,10 +1,13 @@
 // One level of the binary-to-wide conversion (wide_collapse.wgsl). Level 0 (a direct dispatch
-// of one workgroup) emits the root from binary node 0. Level L ≥ 1 (an indirect dispatch of the
-// size level L − 1 wrote) emits the wide nodes [first, end) of its record, each invocation
-// striding over them. Every level writes the record of the next: first = end of this level (the
-// children allocated here follow it), end = the largest end of those children, and
-// max(1, ceil((end − first) / 64)) workgroups (capped; the invocations stride), so every level
-// dispatch runs and passes `first` on even when a level is empty.
+// of one workgroup) emits the root from binary node 0 and, level after level with a barrier
+// between, the levels below it up to top = min(START_LEVELS, level_dispatches): at most 8 and 64
+// wide nodes, one wave of the workgroup each, so these levels cost no dispatch of their own.
+// Level L > top (an indirect dispatch of the size level L − 1 wrote) emits the wide nodes
+// [first, end) of its record, each invocation striding over them. The last level of a dispatch
+// writes the record of the next: first = end of this level (the children allocated here follow
+// it), end = the largest end of those children, and max(1, ceil((end − first) / 64)) workgroups
+// (capped; the invocations stride), so every level dispatch runs and passes `first` on even
+// when a level is empty.
 #include "wide_collapse.wgsl"
 
 fn size_next_level(level: u32, first: u32, children_end: u32) {
@@ -21,18 +24,43 @@ fn open_next_level(level: u32, first: u32) {
     atomicMax(&next_level[record_word(level + 1u, 4u)], first);
 }
 
+// Levels below the root that the root's workgroup emits (level L holds at most 8^L wide nodes:
+// 64 = EMIT_WORKGROUP at level 2). Rust twin: `START_LEVELS` in src/bvh/wide/converter.rs.
+const START_LEVELS: u32 = 2u;
+
+var<workgroup> start_end: u32;
+
 @compute @workgroup_size(64)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32, @builtin(num_workgroups) groups: vec3<u32>) {
     if params.level == 0u {
-        if gid.x != 0u {
-            return;
+        let top = min(START_LEVELS, params.level_dispatches);
+        if lid == 0u {
+            atomicStore(&wide_counters[0], 1u);
+            if top == 0u {
+                open_next_level(0u, 1u);
+            }
         }
-        atomicStore(&wide_counters[0], 1u);
-        open_next_level(0u, 1u);
-        var base = 0u;
-        let children = emit_wide_node(0u, 0u, &base);
-        if children > 0u {
-            size_next_level(0u, 1u, base + children);
+        var first = 0u;
+        var end = 1u;
+        for (var level = 0u; level <= top; level++) {
+            for (var w = first + lid; w < end; w += EMIT_WORKGROUP) {
+                var base = 0u;
+                let children = emit_wide_node(w, select(wide_sources[w], 0u, w == 0u), &base);
+                if level == top && children > 0u {
+                    size_next_level(top, end, base + children);
+                }
+            }
+            // This level's sources are stored before the next level reads them.
+            storageBarrier();
+            if lid == 0u {
+                // An overflow (capacity too small) ends the conversion.
+                start_end = select(atomicLoad(&wide_counters[0]), end, atomicLoad(&wide_counters[2]) != 0u);
+            }
+            first = end;
+            end = workgroupUniformLoad(&start_end);
+            if level + 1u == top && lid == 0u {
+                open_next_level(top, end);
+            }
         }
         return;
     }

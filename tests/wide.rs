@@ -126,13 +126,14 @@ fn gpu_conversion_equals_cpu_twin_for_every_builder() {
 }
 
 /// Every split of the levels between indirect dispatches and the one-workgroup finish gives the
-/// same tree: all levels in the finish (0), a few, and more dispatches than levels.
+/// same tree: all levels in the finish (0), the root's dispatch alone (1, 2) or followed by
+/// level dispatches (3), and more dispatches than levels.
 #[test]
 fn every_level_schedule_gives_the_same_tree() {
     let scene = load_scene("field-10k").unwrap();
     let builder = Builder::Trbvh(TreeletSettings::BALANCED);
     let reference = canonical(&check_conversion(&scene, builder, None));
-    for dispatches in [0, 1, 2, 32] {
+    for dispatches in [0, 1, 2, 3, 32] {
         let wide = check_conversion(&scene, builder, Some(dispatches));
         assert!(
             canonical(&wide) == reference,

@@ -1,6 +1,7 @@
 //! The GPU binary-to-wide conversion, a build stage (pass "wide"): top-down, one wide node per
 //! invocation (`shaders/include/wide_collapse.wgsl`, CPU twin `WideBvh::from_binary`). The root
-//! is one direct dispatch; each of the next `level_dispatches` levels is an indirect dispatch
+//! and the `START_LEVELS` levels below it (at most 8 and 64 wide nodes) are one direct dispatch
+//! of one workgroup; each of the next levels up to `level_dispatches` is an indirect dispatch
 //! whose size the previous level wrote (`wide_nodes_emit`); whatever lies deeper is emitted by
 //! one workgroup, level after level (`wide_nodes_finish`). No CPU round trip.
 
@@ -15,6 +16,9 @@ use crate::Result;
 
 /// Level dispatches a conversion records at most.
 pub const MAX_WIDE_LEVEL_DISPATCHES: u32 = 32;
+/// Levels below the root that the root's dispatch emits too, where `level_dispatches` allows
+/// (WGSL twin in wide_nodes_emit.wgsl).
+const START_LEVELS: u32 = 2;
 /// Words per level record (`RECORD_WORDS` in wide_collapse.wgsl).
 const RECORD_WORDS: u32 = 8;
 
@@ -88,8 +92,15 @@ impl WideConverter {
             zero: 0,
         };
         let mut pass = rec.pass("wide");
-        pass.dispatch(&self.emit, Grid::workgroups(1, 1), &params(0), &buffers(0));
-        for level in 1..=level_dispatches {
+        // The root's dispatch writes the record of the level after its last one.
+        let top = START_LEVELS.min(level_dispatches);
+        pass.dispatch(
+            &self.emit,
+            Grid::workgroups(1, 1),
+            &params(0),
+            &buffers(top),
+        );
+        for level in top + 1..=level_dispatches {
             let offset = u64::from(RECORD_WORDS * level) * 4;
             pass.dispatch_indirect(
                 &self.emit,
