@@ -254,7 +254,7 @@ fn write_back(root: u32, full_split: u32, full_cost: f32) {
     store_next_levels(queued);
 }
 
-// Steps 1-4 for the treelet rooted at `root`.
+// Steps 1-5 for the treelet rooted at `root`.
 fn optimize_treelet(root: u32) {
     let current = form_treelet(root);
     build_half_tables();
