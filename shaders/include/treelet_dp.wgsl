@@ -161,10 +161,12 @@ fn form_treelet(root: u32) -> f32 {
     return current;
 }
 
-// Step 5's record of a write-back, per node written (breadth-first entry e): the node, its
-// primitive count and its children, each as a code: leaf i (< MAX_TREELET) or entry j
-// (MAX_TREELET + j).
-var<private> written_node: array<u32, MAX_TREELET>;
+// Step 4's breadth-first queue: the subsets still to write and the node each goes to (entry 0:
+// the full set, the root), `queued` entries so far; per written entry also its primitive count
+// and its children, each as a code: leaf i (< MAX_TREELET) or entry j (MAX_TREELET + j) (step 5).
+var<private> queue_set: array<u32, MAX_TREELET>;
+var<private> queue_node: array<u32, MAX_TREELET>;
+var<private> queued: u32;
 var<private> written_prims: array<u32, MAX_TREELET>;
 var<private> written_children: array<vec2<u32>, MAX_TREELET>;
 
@@ -174,16 +176,16 @@ fn child_code(part: u32, queued: u32) -> u32 {
     return select(MAX_TREELET + queued, firstTrailingBit(part), countOneBits(part) == 1u);
 }
 
-// Step 5 after a write-back of `written` entries: the next round's level of each node written,
-// children first, from the treelet leaves' levels (all loaded at once: no load waits for another)
-// and the entries' own; no node data is read back.
-fn store_next_levels(written: u32) {
+// Step 5 after a write-back: the next round's level of each node written, children first, from
+// the treelet leaves' levels (all loaded at once: no load waits for another) and the entries'
+// own; no node data is read back.
+fn store_next_levels() {
     var level_of: array<u32, 2u * MAX_TREELET>;
     for (var i = 0u; i < MAX_TREELET; i++) {
         let is_root = i < params.treelet_size && leaf_prims[i] >= params.next_gamma;
         level_of[i] = select(0u, next_levels[leaf_node[min(i, params.treelet_size - 1u)]], is_root);
     }
-    for (var e = written; e > 0u; e--) {
+    for (var e = queued; e > 0u; e--) {
         let entry = e - 1u;
         var level = 0u;
         if written_prims[entry] >= params.next_gamma {
@@ -191,7 +193,7 @@ fn store_next_levels(written: u32) {
             level = 1u + max(level_of[children.x], level_of[children.y]);
         }
         level_of[MAX_TREELET + entry] = level;
-        next_levels[written_node[entry]] = level;
+        next_levels[queue_node[entry]] = level;
     }
 }
 
@@ -209,49 +211,57 @@ fn store_root_next_level(root: u32) {
     next_levels[root] = level;
 }
 
-// Step 4: the new topology of the treelet below `root` from the DP's costs (`full_split`: the
-// full set's best partition, `full_cost`: its cost).
-fn write_back(root: u32, full_split: u32, full_cost: f32) {
-    let full = (1u << params.treelet_size) - 1u;
-    var queue_set: array<u32, MAX_TREELET>;
-    var queue_node: array<u32, MAX_TREELET>;
-    queue_set[0] = full;
+// Step 4, start: the full set goes to the root.
+fn begin_write_back(root: u32) {
+    queue_set[0] = (1u << params.treelet_size) - 1u;
     queue_node[0] = root;
-    var queued = 1u;
+    queued = 1u;
+}
+
+// Step 4 for queue entry `head`: its node gets the children `split` and the rest of its subset
+// (a treelet leaf, or the next internal node of the treelet, queued), the box [lo, hi], `prims`
+// and `cost`; its count and children are kept for step 5.
+fn write_entry(head: u32, split: u32, cost: f32, lo: vec3<f32>, hi: vec3<f32>, prims: u32) {
+    let s = queue_set[head];
+    let node = queue_node[head];
+    let parts = array<u32, 2>(split, s ^ split);
+    var child = array<u32, 2>(0u, 0u);
+    var code = vec2<u32>(0u);
+    for (var k = 0u; k < 2u; k++) {
+        let part = parts[k];
+        code[k] = child_code(part, queued);
+        if countOneBits(part) == 1u {
+            child[k] = leaf_node[firstTrailingBit(part)];
+        } else {
+            child[k] = internal_node[queued];
+            queue_set[queued] = part;
+            queue_node[queued] = child[k];
+            queued++;
+        }
+        parents[child[k]] = node;
+    }
+    nodes[node] = BvhNode(lo, child[0], hi, child[1]);
+    prim_counts[node] = prims;
+    costs[node] = cost;
+    written_prims[head] = prims;
+    written_children[head] = code;
+}
+
+// Steps 4 and 5: the new topology of the treelet below `root` from the DP's costs (`full_split`:
+// the full set's best partition, `full_cost`: its cost).
+fn write_back(root: u32, full_split: u32, full_cost: f32) {
+    begin_write_back(root);
     for (var head = 0u; head < queued; head++) {
         let s = queue_set[head];
-        let node = queue_node[head];
         var split = full_split;
         var cost = full_cost;
-        if s != full {
+        if head != 0u {
             split = best_partition(s).x;
             cost = subset_cost(s);
         }
-        let parts = array<u32, 2>(split, s ^ split);
-        var child = array<u32, 2>(0u, 0u);
-        var code = vec2<u32>(0u);
-        for (var k = 0u; k < 2u; k++) {
-            let part = parts[k];
-            code[k] = child_code(part, queued);
-            if countOneBits(part) == 1u {
-                child[k] = leaf_node[firstTrailingBit(part)];
-            } else {
-                child[k] = internal_node[queued];
-                queue_set[queued] = part;
-                queue_node[queued] = child[k];
-                queued++;
-            }
-            parents[child[k]] = node;
-        }
-        let prims = subset_prims(s);
-        nodes[node] = BvhNode(subset_min(s), child[0], subset_max(s), child[1]);
-        prim_counts[node] = prims;
-        costs[node] = cost;
-        written_node[head] = node;
-        written_prims[head] = prims;
-        written_children[head] = code;
+        write_entry(head, split, cost, subset_min(s), subset_max(s), subset_prims(s));
     }
-    store_next_levels(queued);
+    store_next_levels();
 }
 
 // Steps 1-5 for the treelet rooted at `root`.

@@ -27,7 +27,6 @@ var<workgroup> team_leaf_node: array<u32, TEAMS * MAX_TREELET>;
 var<workgroup> team_leaf_min: array<vec3<f32>, TEAMS * MAX_TREELET>;
 var<workgroup> team_leaf_max: array<vec3<f32>, TEAMS * MAX_TREELET>;
 var<workgroup> team_leaf_prims: array<u32, TEAMS * MAX_TREELET>;
-var<workgroup> team_internal_node: array<u32, TEAMS * MAX_TREELET>;
 var<workgroup> team_low_min: array<vec3<f32>, TEAMS * 16u>;
 var<workgroup> team_low_max: array<vec3<f32>, TEAMS * 16u>;
 var<workgroup> team_low_prims: array<u32, TEAMS * 16u>;
@@ -72,7 +71,8 @@ fn team_subset_prims(base: u32, s: u32) -> u32 {
 }
 
 // Steps 1 and 2 (lane 0): the root's cost (returned) and the treelet (treelet_dp.wgsl's
-// form_treelet), copied into the team's leaf and internal node arrays.
+// form_treelet, whose private arrays lane 0 keeps for the write-back), its leaves copied into the
+// team's arrays.
 fn team_form(root: u32, team: u32) -> f32 {
     let current = form_treelet(root);
     let leaves = team * MAX_TREELET;
@@ -81,57 +81,27 @@ fn team_form(root: u32, team: u32) -> f32 {
         team_leaf_min[leaves + i] = leaf_min[i];
         team_leaf_max[leaves + i] = leaf_max[i];
         team_leaf_prims[leaves + i] = leaf_prims[i];
-        team_internal_node[leaves + i] = internal_node[i];
     }
     return current;
 }
 
-// Step 4 (lane 0): the new topology, breadth-first as in treelet_dp.wgsl's write_back.
+// Steps 4 and 5 (lane 0): treelet_dp.wgsl's write_back, each internal subset's partition and
+// cost taken from the DP, its box from the team's half tables.
 fn team_write_back(root: u32, team: u32, full_split: u32, full_cost: f32) {
-    let leaves = team * MAX_TREELET;
     let subsets = team * TEAM_SUBSETS;
     let halves = team * 16u;
-    let full = (1u << params.treelet_size) - 1u;
-    var queue_set: array<u32, MAX_TREELET>;
-    var queue_node: array<u32, MAX_TREELET>;
-    queue_set[0] = full;
-    queue_node[0] = root;
-    var queued = 1u;
+    begin_write_back(root);
     for (var head = 0u; head < queued; head++) {
         let s = queue_set[head];
-        let node = queue_node[head];
         var split = full_split;
         var cost = full_cost;
-        if s != full {
+        if head != 0u {
             split = team_split[subsets + s];
             cost = team_cost[subsets + s];
         }
-        let parts = array<u32, 2>(split, s ^ split);
-        var child = array<u32, 2>(0u, 0u);
-        var code = vec2<u32>(0u);
-        for (var k = 0u; k < 2u; k++) {
-            let part = parts[k];
-            code[k] = child_code(part, queued);
-            if countOneBits(part) == 1u {
-                child[k] = team_leaf_node[leaves + firstTrailingBit(part)];
-            } else {
-                child[k] = team_internal_node[leaves + queued];
-                queue_set[queued] = part;
-                queue_node[queued] = child[k];
-                queued++;
-            }
-            parents[child[k]] = node;
-        }
-        let prims = team_subset_prims(halves, s);
-        nodes[node] = BvhNode(team_subset_min(halves, s), child[0], team_subset_max(halves, s), child[1]);
-        prim_counts[node] = prims;
-        costs[node] = cost;
-        written_node[head] = node;
-        written_prims[head] = prims;
-        written_children[head] = code;
+        write_entry(head, split, cost, team_subset_min(halves, s), team_subset_max(halves, s), team_subset_prims(halves, s));
     }
-    // Step 5 (treelet_dp.wgsl), from lane 0's formation arrays.
-    store_next_levels(queued);
+    store_next_levels();
 }
 
 // Steps 1-5 for the treelet rooted at `root`, by the invocation in lane `lane` of team `team`.
