@@ -65,12 +65,28 @@ fn render_writes_a_png() {
     std::fs::remove_file(&out).ok();
 }
 
+/// Runs `treelet bench` with `args`, which must succeed; its JSON lines.
+fn bench_records(args: &[&str]) -> Vec<serde_json::Value> {
+    let args: Vec<&str> = ["bench"].iter().chain(args).copied().collect();
+    let result = treelet(&args);
+    assert!(
+        result.status.success(),
+        "{}",
+        String::from_utf8_lossy(&result.stderr)
+    );
+    let stdout = String::from_utf8(result.stdout).unwrap();
+    let records: Vec<serde_json::Value> = stdout
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    records
+}
+
 /// `bench` prints one JSON line per builder, GPU builders first, each with the min/median/max of
 /// its timed builds and traces and the warm-up it had.
 #[test]
 fn bench_prints_json_lines() {
-    let result = treelet(&[
-        "bench",
+    let records = bench_records(&[
         "--scene",
         "cornell",
         "--builder",
@@ -87,16 +103,6 @@ fn bench_prints_json_lines() {
         "--warmup-ms",
         "50",
     ]);
-    assert!(
-        result.status.success(),
-        "{}",
-        String::from_utf8_lossy(&result.stderr)
-    );
-    let stdout = String::from_utf8(result.stdout).unwrap();
-    let records: Vec<serde_json::Value> = stdout
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect();
     let builders: Vec<&str> = records
         .iter()
         .map(|r| r["builder"].as_str().unwrap())
@@ -150,8 +156,7 @@ fn bench_prints_json_lines() {
 /// and reports each schedule; every schedule builds the same tree.
 #[test]
 fn bench_compares_round_schedules_on_the_same_tree() {
-    let result = treelet(&[
-        "bench",
+    let records = bench_records(&[
         "--scene",
         "field-10k",
         "--builder",
@@ -171,16 +176,6 @@ fn bench_compares_round_schedules_on_the_same_tree() {
         "--team-below",
         "0,4096",
     ]);
-    assert!(
-        result.status.success(),
-        "{}",
-        String::from_utf8_lossy(&result.stderr)
-    );
-    let stdout = String::from_utf8(result.stdout).unwrap();
-    let records: Vec<serde_json::Value> = stdout
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect();
     let schedule = |r: &serde_json::Value| {
         (
             r["builder"].as_str().unwrap().to_owned(),
