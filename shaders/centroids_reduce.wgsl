@@ -1,14 +1,10 @@
 // Scene centroid bounds by parallel reduction (LBVH stage 1, Karras 2012 §3), in one dispatch:
-// each workgroup reduces a tile of TILE elements in workgroup memory and adds its box to the
+// each workgroup reduces a tile of REDUCE_TILE elements in workgroup memory and adds its box to the
 // eight box words with six atomicMax (box_reduce.wgsl): the bounds of the primitive boxes'
 // centroids, where the boxes are not the triangles' (pre-split references; triangles_bounds.wgsl
 // reduces as it computes them). min/max are exact, so the result is bit-identical to the CPU twin
 // in any order.
 #include "box_words.wgsl"
-
-const WORKGROUP: u32 = 256u;
-const PER_INVOCATION: u32 = 4u;
-const TILE: u32 = 1024u;
 
 struct ReduceParams {
     count: u32,
@@ -27,10 +23,6 @@ struct ReduceParams {
 
 #include "box_reduce.wgsl"
 
-fn tile_index(wid: vec3<u32>, groups: vec3<u32>) -> u32 {
-    return wid.x + wid.y * groups.x;
-}
-
 @compute @workgroup_size(WORKGROUP)
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let tile = tile_index(wid, groups);
@@ -38,7 +30,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: 
     var hi = vec3<f32>(-F32_MAX);
     let count = min(params.count, count_limit[0]);
     for (var k = 0u; k < PER_INVOCATION; k++) {
-        let i = tile * TILE + k * WORKGROUP + lid;
+        let i = tile * REDUCE_TILE + k * WORKGROUP + lid;
         if i < count {
             let c = (boxes_in[i].min + boxes_in[i].max) * 0.5;
             lo = min(lo, c);

@@ -2,14 +2,10 @@
 // params.lbvh_input = 1, the primitive boxes of the BVH build, one AABB per triangle (the input of
 // LBVH stage 1 when no triangle is pre-split; pre-splitting writes several clipped boxes per
 // triangle instead), and the bounds of their centroids, which the LBVH's Morton grid spans; with
-// 0, only the scene box, which pre-splitting's grid spans. Each workgroup takes a tile of TILE
-// triangles.
+// 0, only the scene box, which pre-splitting's grid spans. Each workgroup takes a tile of
+// REDUCE_TILE triangles.
 #include "bvh_node.wgsl"
 #include "box_words.wgsl"
-
-const WORKGROUP: u32 = 256u;
-const PER_INVOCATION: u32 = 4u;
-const TILE: u32 = 1024u;
 
 // Rust twin: `TriangleBoundsParams` (src/bvh/lbvh/triangles_bounds.rs).
 struct TriangleBoundsParams {
@@ -31,11 +27,11 @@ struct TriangleBoundsParams {
 
 @compute @workgroup_size(WORKGROUP)
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
-    let tile = wid.x + wid.y * groups.x;
+    let tile = tile_index(wid, groups);
     var lo = vec3<f32>(F32_MAX);
     var hi = vec3<f32>(-F32_MAX);
     for (var k = 0u; k < PER_INVOCATION; k++) {
-        let i = tile * TILE + k * WORKGROUP + lid;
+        let i = tile * REDUCE_TILE + k * WORKGROUP + lid;
         if i < params.count {
             let t = triangles[i];
             let box_min = min(t.v0, min(t.v1, t.v2));

@@ -75,11 +75,10 @@ fn bench_records(args: &[&str]) -> Vec<serde_json::Value> {
         String::from_utf8_lossy(&result.stderr)
     );
     let stdout = String::from_utf8(result.stdout).unwrap();
-    let records: Vec<serde_json::Value> = stdout
+    stdout
         .lines()
         .map(|l| serde_json::from_str(l).unwrap())
-        .collect();
-    records
+        .collect()
 }
 
 /// `bench` prints one JSON line per builder, GPU builders first, each with the min/median/max of

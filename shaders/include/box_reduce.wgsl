@@ -1,8 +1,18 @@
-// A workgroup's share of a box reduction (box_words.wgsl): the workgroup's invocations reduce
-// their boxes in workgroup memory, then invocation 0 adds the result to the box words with six
-// atomicMax (an empty box adds nothing). The including kernel declares WORKGROUP (a power of two)
-// and `box_words: array<atomic<u32>>` (read_write storage), and includes box_words.wgsl. Call
-// from uniform control flow.
+// A workgroup's share of a box reduction (box_words.wgsl): a tile of REDUCE_TILE items, four per
+// invocation; the workgroup's invocations reduce their boxes in workgroup memory, then
+// invocation 0 adds the result to the box words with six atomicMax (an empty box adds nothing).
+// The including kernel declares `box_words: array<atomic<u32>>` (read_write storage), includes
+// box_words.wgsl, and runs with @workgroup_size(WORKGROUP). Call from uniform control flow.
+
+#include "constants.wgsl"
+
+const WORKGROUP: u32 = 256u;
+const PER_INVOCATION: u32 = REDUCE_TILE / WORKGROUP;
+
+// The tile of a workgroup of a (possibly 2D) grid.
+fn tile_index(wid: vec3<u32>, groups: vec3<u32>) -> u32 {
+    return wid.x + wid.y * groups.x;
+}
 
 var<workgroup> shared_min: array<vec3<f32>, WORKGROUP>;
 var<workgroup> shared_max: array<vec3<f32>, WORKGROUP>;

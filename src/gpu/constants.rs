@@ -40,6 +40,9 @@ pub const RADIX_BITS: u32 = 4;
 pub const SORT_TILE: u32 = 8192;
 /// Elements per workgroup of the prefix scan.
 pub const SCAN_BLOCK: u32 = 4096;
+/// Items per workgroup of a box reduction (`centroids_reduce`, `triangles_bounds`; four per
+/// invocation, box_reduce.wgsl).
+pub const REDUCE_TILE: u32 = 1024;
 
 /// The text of the include `constants.wgsl`.
 pub fn wgsl() -> String {
@@ -62,6 +65,7 @@ pub fn wgsl() -> String {
         u32_const("RADIX_BITS", RADIX_BITS),
         u32_const("SORT_TILE", SORT_TILE),
         u32_const("SCAN_BLOCK", SCAN_BLOCK),
+        u32_const("REDUCE_TILE", REDUCE_TILE),
         f32_const("F32_MAX", f32::MAX),
     ]
     .concat()

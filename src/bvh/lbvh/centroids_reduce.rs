@@ -6,11 +6,9 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
 use crate::geometry::Aabb;
+use crate::gpu::constants::REDUCE_TILE;
 use crate::gpu::{kernel, storage_buffer_zeroed, GpuContext, Grid, ItemCount, Kernel, Pass};
 use crate::Result;
-
-/// Elements one workgroup reduces (WORKGROUP × PER_INVOCATION in the kernel).
-const TILE: u32 = 1024;
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -56,7 +54,6 @@ impl CentroidsReduce {
         box_words: &wgpu::Buffer,
     ) {
         let ctx = pass.ctx();
-        let tiles = count.capacity().div_ceil(TILE).max(1);
         let params = ReduceParams {
             count: count.capacity(),
             _pad: [0; 3],
@@ -64,11 +61,16 @@ impl CentroidsReduce {
         let limit = count.limit(ctx);
         pass.dispatch(
             &self.kernel,
-            Grid::items(ctx, tiles, 1),
+            reduce_grid(ctx, count.capacity()),
             &params,
             &[prim_boxes, box_words, limit],
         );
     }
+}
+
+/// The grid of a box reduction over `count` items: a workgroup per tile (box_reduce.wgsl).
+pub(crate) fn reduce_grid(ctx: &GpuContext, count: u32) -> Grid {
+    Grid::items(ctx, count.div_ceil(REDUCE_TILE).max(1), 1)
 }
 
 /// CPU twin of `box_words.wgsl`'s `box_of_words`: the box the eight words of a reduction hold.

@@ -6,12 +6,10 @@
 
 use bytemuck::{Pod, Zeroable};
 
+use super::centroids_reduce::reduce_grid;
 use crate::geometry::Aabb;
-use crate::gpu::{kernel, Grid, Kernel, Pass};
+use crate::gpu::{kernel, Kernel, Pass};
 use crate::scene::Triangle;
-
-/// Triangles one workgroup takes (WORKGROUP × PER_INVOCATION in the kernel).
-const TILE: u32 = 1024;
 
 /// Parameters of `triangles_bounds` (WGSL twin in the kernel).
 #[repr(C)]
@@ -75,7 +73,7 @@ impl TrianglesBounds {
         };
         pass.dispatch(
             &self.kernel,
-            Grid::items(ctx, count.div_ceil(TILE).max(1), 1),
+            reduce_grid(ctx, count),
             &params,
             &[triangles, prim_boxes, box_words],
         );
