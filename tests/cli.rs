@@ -311,7 +311,7 @@ fn options_of_other_builders_are_refused() {
     );
     assert_clean_failure(
         &["bench", "--builder", "lbvh", "--team-below", "64"],
-        "--level-dispatches and --team-below apply only to trbvh and trbvh-split",
+        "--team-below does not apply to builder lbvh: only trbvh and trbvh-split have treelets",
     );
     assert_clean_failure(
         &["bench", "--builder", "trbvh", "--split-budget", "0.3"],

@@ -17,9 +17,9 @@ use treelet::bvh::{
 };
 use treelet::gpu::{aggregate_stages, GpuContext, Spread, Timing, Warmup};
 use treelet::trace::{PathTracer, TraceStats};
-use treelet::{Error, Result};
+use treelet::Result;
 
-use super::{parse_builder, TraceArgs};
+use super::{parse_builder, refuse_treelet_options, TraceArgs};
 
 #[derive(Args, Debug)]
 pub struct BenchArgs {
@@ -62,12 +62,13 @@ impl BenchArgs {
     /// Every combination of the requested round schedules (the default where none is given);
     /// fails when one is given but no builder has treelets to schedule.
     fn schedules(&self, builders: &[Builder]) -> Result<Vec<RoundSchedule>> {
-        let given = !self.level_dispatches.is_empty() || !self.team_below.is_empty();
-        if given && !builders.iter().any(|b| b.treelet_settings().is_some()) {
-            return Err(Error::InvalidArgument(
-                "--level-dispatches and --team-below apply only to trbvh and trbvh-split".into(),
-            ));
-        }
+        refuse_treelet_options(
+            builders,
+            &[
+                ("--level-dispatches", !self.level_dispatches.is_empty()),
+                ("--team-below", !self.team_below.is_empty()),
+            ],
+        )?;
         let or_default = |values: &[u32]| -> Vec<Option<u32>> {
             if values.is_empty() {
                 vec![None]

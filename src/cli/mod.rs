@@ -115,29 +115,19 @@ impl TraceArgs {
     /// Fails when a treelet option is given but no builder in `builders` has treelets, or a split
     /// budget but none pre-splits: such an option would be silently ignored.
     fn check_options_apply(&self, builders: &[Builder]) -> Result<()> {
-        let names = || {
-            let names: Vec<_> = builders.iter().map(|b| b.name()).collect();
-            names.join(", ")
-        };
-        let treelet_options = [
-            ("--treelet-size", !self.treelet_size.is_empty()),
-            ("--rounds", !self.rounds.is_empty()),
-            ("--preset", self.preset.is_some()),
-        ];
-        let has_treelets = builders.iter().any(|b| b.treelet_settings().is_some());
-        if let Some((flag, _)) = treelet_options.iter().find(|(_, given)| *given) {
-            if !has_treelets {
-                return Err(treelet::Error::InvalidArgument(format!(
-                    "{flag} does not apply to builder {}: only trbvh and trbvh-split have treelets",
-                    names()
-                )));
-            }
-        }
+        refuse_treelet_options(
+            builders,
+            &[
+                ("--treelet-size", !self.treelet_size.is_empty()),
+                ("--rounds", !self.rounds.is_empty()),
+                ("--preset", self.preset.is_some()),
+            ],
+        )?;
         let splits = builders.iter().any(|b| matches!(b, Builder::TrbvhSplit(_)));
         if !self.split_budget.is_empty() && !splits {
             return Err(treelet::Error::InvalidArgument(format!(
                 "--split-budget does not apply to builder {}: only trbvh-split pre-splits",
-                names()
+                builder_names(builders)
             )));
         }
         Ok(())
@@ -211,6 +201,25 @@ impl TraceArgs {
             max_leaf_size: self.max_leaf_size,
             ..SahParams::default()
         })
+    }
+}
+
+/// The names of `builders`, comma-separated (error messages).
+fn builder_names(builders: &[Builder]) -> String {
+    let names: Vec<_> = builders.iter().map(|b| b.name()).collect();
+    names.join(", ")
+}
+
+/// Fails when one of the treelet `options` (flag, given) is given but no builder in `builders`
+/// has treelets: the option would be silently ignored.
+fn refuse_treelet_options(builders: &[Builder], options: &[(&str, bool)]) -> Result<()> {
+    let has_treelets = builders.iter().any(|b| b.treelet_settings().is_some());
+    match options.iter().find(|(_, given)| *given) {
+        Some((flag, _)) if !has_treelets => Err(treelet::Error::InvalidArgument(format!(
+            "{flag} does not apply to builder {}: only trbvh and trbvh-split have treelets",
+            builder_names(builders)
+        ))),
+        _ => Ok(()),
     }
 }
 
