@@ -36,13 +36,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
         let top = min(START_LEVELS, params.level_dispatches);
         if lid == 0u {
             atomicStore(&wide_counters[0], 1u);
-            if top == 0u {
-                open_next_level(0u, 1u);
-            }
         }
         var first = 0u;
         var end = 1u;
         for (var level = 0u; level <= top; level++) {
+            if level == top && lid == 0u {
+                open_next_level(top, end);
+            }
             for (var w = first + lid; w < end; w += EMIT_WORKGROUP) {
                 var base = 0u;
                 let children = emit_wide_node(w, select(wide_sources[w], 0u, w == 0u), &base);
@@ -58,9 +58,6 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
             }
             first = end;
             end = workgroupUniformLoad(&start_end);
-            if level + 1u == top && lid == 0u {
-                open_next_level(top, end);
-            }
         }
         return;
     }
