@@ -172,7 +172,7 @@ impl TreeletRounds {
     /// Records one round over a working tree of `count` leaves (LBVH layout) whose arrival
     /// counters and schedule are zero: the schedule and the dispatched levels in a pass
     /// "treelets", the climb in a pass "treelets climb" (timed apart: the one is throughput, the
-    /// other a chain of small waves). `gamma = u32::MAX` only updates counts and costs.
+    /// other a chain of small waves). `gamma = u32::MAX` only computes boxes, counts and costs.
     pub fn record(
         &self,
         rec: &mut Recorder<'_>,
