@@ -1,12 +1,12 @@
-// Add-back of the multi-level exclusive scan `sort::PrefixScan`: after counts_scan.wgsl scanned
-// each SCAN_BLOCK of `data` locally and the next level scanned the block totals `sums`, every element
-// of block b gets sums[b] added, which makes the scan of `data` global (every column of `data` on
-// its own: scan_blocks.wgsl).
+// Add-back of the exclusive scan `sort::PrefixScan`: after counts_scan.wgsl scanned each
+// SCAN_BLOCK of `data` locally and left each block's offset in `block_offsets`, every element of
+// block b gets block_offsets[b] added, which makes the scan of `data` global (every column of
+// `data` on its own: scan_blocks.wgsl).
 #include "scan_blocks.wgsl"
 
 @group(0) @binding(0) var<uniform> params: ScanParams;
 @group(0) @binding(1) var<storage, read_write> data: array<u32>;
-@group(0) @binding(2) var<storage, read> sums: array<u32>;
+@group(0) @binding(2) var<storage, read> block_offsets: array<u32>;
 
 @compute @workgroup_size(256)
 fn main(
@@ -18,7 +18,7 @@ fn main(
     if !b.exists {
         return;
     }
-    let add = sums[b.id];
+    let add = block_offsets[b.id];
     let base = b.first + lid * (SCAN_BLOCK / 256u);
     for (var i = 0u; i < SCAN_BLOCK / 256u; i++) {
         if base + i < params.len {

@@ -1,7 +1,8 @@
 //! The GPU exclusive prefix scan (`sort::PrefixScan`, used by the collapse and pre-splitting)
-//! against the CPU's exclusive scan: lengths around the block size, two and three levels with
-//! their add-backs, 2D grids, the grand total, and the block-local scan of several columns (each
-//! element plus its block's offset, the column totals).
+//! against the CPU's exclusive scan: lengths around the block size, many blocks (more than the
+//! last workgroup scans at once) with the add-back, 2D grids, the grand total, and the
+//! block-local scan of several columns (each element plus its block's offset, the column totals),
+//! twice in a row with the same buffers (the ticket is back at zero).
 
 mod common;
 
@@ -56,10 +57,10 @@ fn lengths_around_blocks() {
 }
 
 #[test]
-fn two_and_three_levels() {
+fn many_blocks() {
     let mut scan = PrefixScan::new(gpu());
     let b = SCAN_BLOCK as usize;
-    // Two levels (block totals scanned once more), then three (b² + 1 elements).
+    // 36 blocks, then b + 1 (the last workgroup scans the block totals in two tiles).
     check(&mut scan, 5 * b * 7 + 3, 110);
     check(&mut scan, b * b + 1, 111);
 }
@@ -109,8 +110,8 @@ fn check_block_local(scan: &mut PrefixScan, len: usize, columns: usize, seed: u6
 fn block_local_columns() {
     let mut scan = PrefixScan::new(gpu());
     let b = SCAN_BLOCK as usize;
-    // One block (the block totals still get a level of their own: offsets of 0), several
-    // blocks, two levels of blocks; one, two and three columns.
+    // One block (offsets of 0), several blocks, 36 blocks; one, two and three columns; the same
+    // sizes twice.
     for (i, (len, columns)) in [
         (1, 2),
         (b - 1, 2),
@@ -118,6 +119,8 @@ fn block_local_columns() {
         (b + 1, 2),
         (3 * b + 17, 3),
         (5 * b * 7 + 3, 2),
+        (3 * b + 17, 3),
+        (b + 1, 2),
     ]
     .into_iter()
     .enumerate()
@@ -127,8 +130,8 @@ fn block_local_columns() {
 }
 
 #[test]
-fn block_local_three_levels_and_2d_grids() {
-    // Three levels (b² + 1 elements): the block totals are scanned with their own add-back.
+fn block_local_many_blocks_and_2d_grids() {
+    // b + 1 blocks (b² + 1 elements): the block totals are scanned in two tiles.
     let mut scan = PrefixScan::new(gpu());
     let b = SCAN_BLOCK as usize;
     check_block_local(&mut scan, b * b + 1, 1, 140);

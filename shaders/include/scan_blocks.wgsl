@@ -1,8 +1,8 @@
-// Shared by counts_scan.wgsl and counts_add.wgsl (one level of `sort::PrefixScan`): the parameters
-// (ScanParams must match src/sort/prefix_scan.rs) and which block a workgroup works on. `columns`
-// arrays of `len` elements are stored back to back and scanned independently: workgroup
-// c · num_blocks + b takes block b (SCAN_BLOCK elements) of column c, and its block total is
-// sums[c · num_blocks + b] (the next level's column c). Workgroups are linear indices over a 1D or
+// Shared by counts_scan.wgsl and counts_add.wgsl (`sort::PrefixScan`): the parameters (ScanParams
+// must match src/sort/prefix_scan.rs) and which block a workgroup works on. `columns` arrays of
+// `len` elements are stored back to back and scanned independently: workgroup c · num_blocks + b
+// takes block b (SCAN_BLOCK elements) of column c, whose total and then offset is word
+// c · num_blocks + b of the block sums. Workgroups are linear indices over a 1D or
 // 2D grid: wid.x + wid.y · num_workgroups.x. The including kernel declares `params`.
 #include "constants.wgsl"
 

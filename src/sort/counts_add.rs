@@ -1,5 +1,5 @@
-//! Prefix scan add-back (kernel `counts_add`): every element of block b gets the scanned total of
-//! the blocks before it, which makes the blockwise scans of `counts_scan` global.
+//! Prefix scan add-back (kernel `counts_add`): every element of block b gets the block's offset,
+//! which makes the blockwise scans of `counts_scan` global.
 
 use super::prefix_scan::ScanParams;
 use crate::gpu::kernel;

@@ -1,8 +1,8 @@
 //! GPU leaf collapse and compaction into the traversal layout (Karras & Aila 2013, §3): mark kept
 //! nodes and output leaves (kernel `nodes_mark`), exclusive scans for new node indices and leaf
-//! primitive ranges (`sort::PrefixScan`, both columns in the same dispatches, block-local: the
+//! primitive ranges (`sort::PrefixScan`, both columns in one dispatch, block-local: the
 //! compaction adds each block's offset where it reads), then write the output tree (kernel
-//! `nodes_compact`). Four dispatches up to 8.4M leaves. CPU twin: `WorkingTree::collapse`.
+//! `nodes_compact`). Three dispatches. CPU twin: `WorkingTree::collapse`.
 
 use super::dp::CostModel;
 use super::nodes_compact::{CompactParams, NODES_COMPACT};
@@ -43,7 +43,7 @@ impl Collapse {
         })
     }
 
-    /// Grows the scan's level buffers for a working tree of `n` leaves.
+    /// Grows the scan's buffers for a working tree of `n` leaves.
     pub fn reserve(&mut self, ctx: &GpuContext, n: u32) -> Result<()> {
         self.scan.reserve(ctx, 2 * n - 1, 2)
     }
