@@ -7,13 +7,18 @@
 // descendant, so each level's treelets are disjoint and can be optimized at once, after the
 // levels below (treelets_optimize.wgsl, treelets_climb.wgsl). Costs of nodes below gamma are
 // final here; a root's cost is recomputed when its level is processed. The roots of each level
-// up to level_dispatches + 1 are counted in the schedule buffer (treelet_round.wgsl).
+// up to level_dispatches + 1 go into that level's bucket as they are found (treelet_round.wgsl:
+// a counter per level in the schedule buffer, the level's slots of `roots`), and the workgroup
+// that finishes last (a ticket in the schedule buffer; no workgroup waits for another) writes
+// each dispatched level's indirect arguments from the final counts: a workgroup per treelet
+// below params.team_below treelets, else per 32 treelets (treelets_optimize.wgsl).
 // The first round also gives the LBVH its boxes (Karras 2012 §4, as bounds_refit.wgsl does for a
 // plain LBVH): each leaf's from its primitive, each internal node's from its children, in the
 // same climb (one climb per build saved). After the first round (levels_only), boxes, counts,
 // costs and the roots' levels of the new gamma are those the treelet kernels of the round before
-// left (treelet_dp.wgsl, step 5): one invocation per internal node only counts the roots per
-// level, without a climb.
+// left (treelet_dp.wgsl, step 5): one invocation per internal node only buckets the roots, without
+// a climb, and zeroes the node's arrival counter for treelets_climb.wgsl (in the first round the
+// climb's second arrival at a node zeroes it).
 // Node children were written by earlier dispatches; the boxes, counts, costs and levels this
 // climb writes are shared across workgroups, so all node data goes through atomics (node
 // words, node_words.wgsl), ordered around the counter increments by storageBarriers.
@@ -22,6 +27,9 @@
 #include "treelet_round.wgsl"
 
 const WORKGROUP: u32 = 64u;
+// Workgroup size of treelets_optimize.wgsl.
+const OPTIMIZE_WORKGROUP: u32 = 32u;
+const MAX_WORKGROUPS_X: u32 = 65535u;
 
 @group(0) @binding(0) var<uniform> params: RoundParams;
 @group(0) @binding(1) var<storage, read_write> node_words: array<atomic<u32>>;
@@ -36,11 +44,14 @@ const WORKGROUP: u32 = 64u;
 // First round: the primitive boxes and the primitive of each leaf (the sorted order).
 @group(0) @binding(9) var<storage, read> prim_boxes: array<Aabb>;
 @group(0) @binding(10) var<storage, read> order: array<u32>;
+// The roots of each bucketed level, in its slots (level_start).
+@group(0) @binding(11) var<storage, read_write> roots: array<u32>;
 
 #include "node_words.wgsl"
 
 var<workgroup> climbing: atomic<u32>;
 var<workgroup> any_climbing: u32;
+var<workgroup> is_last: u32;
 
 fn left_child(node: u32) -> u32 {
     return atomicLoad(&node_words[node * 8u + 3u]);
@@ -59,8 +70,32 @@ fn child_level(child: u32) -> u32 {
     return select(0u, atomicLoad(&levels[child]), is_root(child));
 }
 
+// Adds the root `node` of level `level` (>= 1) to its level's bucket, if its level is bucketed.
+fn bucket(node: u32, level: u32) {
+    if level <= params.level_dispatches + 1u {
+        roots[level_start(level) + atomicAdd(&schedule[level - 1u], 1u)] = node;
+    }
+}
+
+// The last workgroup: each dispatched level's indirect arguments, from its root count.
+fn write_dispatch_args() {
+    for (var level = 1u; level <= params.level_dispatches; level++) {
+        let size = atomicLoad(&schedule[level - 1u]);
+        let groups = select((size + OPTIMIZE_WORKGROUP - 1u) / OPTIMIZE_WORKGROUP, size, size < params.team_below);
+        let y = (groups + MAX_WORKGROUPS_X - 1u) / MAX_WORKGROUPS_X;
+        let at = SCHEDULE_ARGS + 3u * (level - 1u);
+        atomicStore(&schedule[at], select(0u, (groups + y - 1u) / max(y, 1u), y > 0u));
+        atomicStore(&schedule[at + 1u], y);
+        atomicStore(&schedule[at + 2u], 1u);
+    }
+}
+
 @compute @workgroup_size(WORKGROUP)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+fn main(
+    @builtin(global_invocation_id) gid: vec3<u32>,
+    @builtin(local_invocation_index) lid: u32,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+) {
     let j = gid.x + gid.y * params.row_pitch;
     let n = min(params.count, count_limit[0]);
     var node = n - 1u + j;
@@ -71,10 +106,10 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
     var is_climbing = false;
     if params.levels_only != 0u {
         // Invocation j: internal node j, whose level the round before computed; no climb.
-        if j + 1u < n && is_root(j) {
-            let level = atomicLoad(&levels[j]);
-            if level >= 1u && level <= params.level_dispatches + 1u {
-                atomicAdd(&schedule[level - 1u], 1u);
+        if j + 1u < n {
+            atomicStore(&arrivals[j], 0u);
+            if is_root(j) {
+                bucket(j, atomicLoad(&levels[j]));
             }
         }
     } else if j < n {
@@ -101,6 +136,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
                 is_climbing = false;
                 atomicSub(&climbing, 1u);
             } else {
+                // Second: zeroed for the treelet climb.
+                atomicStore(&arrivals[parent], 0u);
                 node = parent;
             }
         }
@@ -119,9 +156,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
             var level = 0u;
             if is_root(node) {
                 level = max(child_level(left), child_level(right)) + 1u;
-                if level <= params.level_dispatches + 1u {
-                    atomicAdd(&schedule[level - 1u], 1u);
-                }
+                bucket(node, level);
             }
             atomicStore(&levels[node], level);
             if node == 0u {
@@ -136,5 +171,18 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
         if workgroupUniformLoad(&any_climbing) == 0u {
             break;
         }
+    }
+    // Release: the workgroup's roots are counted before the ticket is taken.
+    storageBarrier();
+    if lid == 0u {
+        is_last = u32(atomicAdd(&schedule[SCHEDULE_TICKET], 1u) + 1u == nwg.x * nwg.y);
+    }
+    if workgroupUniformLoad(&is_last) == 0u {
+        return;
+    }
+    // Acquire: every workgroup's counts are visible.
+    storageBarrier();
+    if lid == 0u {
+        write_dispatch_args();
     }
 }

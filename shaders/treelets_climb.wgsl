@@ -1,10 +1,10 @@
-// Treelet round, step 4: the levels above level_dispatches, in one workgroup (a few treelets per
+// Treelet round, step 3: the levels above level_dispatches, in one workgroup (a few treelets per
 // level near the top of a tree: one dispatch each would mostly cost dispatch overhead). It starts
-// from the roots of level top = level_dispatches + 1 (bucketed by roots_bucket.wgsl) and climbs a
+// from the roots of level top = level_dispatches + 1 (bucketed by nodes_level.wgsl) and climbs a
 // level per wave: a root's level is one more than its children's highest (nodes_level.wgsl), so
 // the parents in the level above the wave's are exactly the next wave, each added once, by the
 // first of its children in the wave to claim it (an atomicMax of the next level into its arrival
-// counter, zeroed by roots_bucket.wgsl). Works for trees of any height. The next wave is found
+// counter, zeroed by nodes_level.wgsl). Works for trees of any height. The next wave is found
 // before this wave's treelets are optimized, as they change neither a root's parent link nor any
 // level (no root of a wave is an ancestor of another), and by the workgroup's last invocations,
 // so that in a wave of few treelets a team without one finds it while the others optimize.
@@ -35,7 +35,7 @@ const TEAM_WAVE: u32 = 32u;
 // This round's level of each root.
 @group(0) @binding(9) var<storage, read> levels: array<u32>;
 // Per internal node: the highest level whose wave claimed it (0: none), zeroed by
-// roots_bucket.wgsl.
+// nodes_level.wgsl.
 @group(0) @binding(10) var<storage, read_write> arrivals: array<atomic<u32>>;
 // Two halves of `half` entries each: the current wave and the next.
 @group(0) @binding(11) var<storage, read_write> waves: array<u32>;
@@ -50,10 +50,7 @@ var<workgroup> next_size: atomic<u32>;
 fn main(@builtin(local_invocation_index) lid: u32) {
     let top = params.level_dispatches + 1u;
     let half = arrayLength(&waves) / 2u;
-    var first = 0u;
-    for (var below = 1u; below < top; below++) {
-        first += schedule[below - 1u];
-    }
+    let first = level_start(top);
     let start = schedule[top - 1u];
     for (var i = lid; i < start; i += WORKGROUP) {
         waves[i] = roots[first + i];

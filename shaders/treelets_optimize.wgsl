@@ -1,5 +1,5 @@
-// Treelet round, step 3: the treelets of one level (params.level <= level_dispatches), bucketed by
-// roots_bucket.wgsl. Dispatched indirectly with the level's workgroup count: a level of at least
+// Treelet round, step 2: the treelets of one level (params.level <= level_dispatches), bucketed by
+// nodes_level.wgsl. Dispatched indirectly with the level's workgroup count: a level of at least
 // params.team_below treelets gives each an invocation (treelet_dp.wgsl), 32 per workgroup; a
 // smaller level gives each a workgroup, whose 32 invocations share its DP (treelet_team.wgsl). The
 // dispatches of the levels below have finished, so node data is read with plain loads.
@@ -32,10 +32,7 @@ fn main(
     @builtin(workgroup_id) wid: vec3<u32>,
     @builtin(num_workgroups) groups: vec3<u32>,
 ) {
-    var first = 0u;
-    for (var below = 1u; below < params.level; below++) {
-        first += schedule[below - 1u];
-    }
+    let first = level_start(params.level);
     if lid == 0u {
         level_size = schedule[params.level - 1u];
     }

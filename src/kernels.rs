@@ -17,7 +17,6 @@ pub const ALL: &[&KernelInfo] = &[
     &sort::COUNTS_SCAN.info,
     &sort::COUNTS_ADD.info,
     &bvh::treelet::NODES_LEVEL.info,
-    &bvh::treelet::ROOTS_BUCKET.info,
     &bvh::treelet::TREELETS_OPTIMIZE.info,
     &bvh::treelet::TREELETS_CLIMB.info,
     &bvh::treelet::NODES_MARK.info,

@@ -38,10 +38,22 @@ struct RoundParams {
 }
 
 // The schedule buffer (u32 words): per level L = 1 ..= MAX_LEVEL_DISPATCHES + 1, the number of
-// treelet roots at L (word L - 1) and a cursor for bucketing them (SCHEDULE_CURSORS + L - 1); then
-// the indirect dispatch arguments (x, y, z) of each level's treelets_optimize dispatch.
-const SCHEDULE_CURSORS: u32 = MAX_LEVEL_DISPATCHES + 1u;
-const SCHEDULE_ARGS: u32 = 2u * (MAX_LEVEL_DISPATCHES + 1u);
+// treelet roots at L bucketed so far (word L - 1); the ticket of nodes_level.wgsl's workgroups;
+// then the indirect dispatch arguments (x, y, z) of each level's treelets_optimize dispatch.
+const SCHEDULE_TICKET: u32 = MAX_LEVEL_DISPATCHES + 1u;
+const SCHEDULE_ARGS: u32 = MAX_LEVEL_DISPATCHES + 2u;
+
+// First slot of level `level`'s roots in the roots buffer (twin: `level_start` in
+// src/bvh/treelet/rounds.rs). Level l has ⌊count / (gamma + l - 1)⌋ slots: the roots of a level
+// are disjoint subtrees, and a root of level l holds at least gamma + l - 1 leaves (gamma, and
+// one more than its child of level l - 1).
+fn level_start(level: u32) -> u32 {
+    var first = 0u;
+    for (var l = 1u; l < level; l++) {
+        first += params.count / (params.gamma + l - 1u);
+    }
+    return first;
+}
 
 // Cost of a node of area a and n primitives whose children cost `children` in total:
 // min(Ci·a + children, Ct·a·n where a leaf of n primitives is allowed).

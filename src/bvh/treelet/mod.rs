@@ -4,7 +4,8 @@
 //!
 //! Per build, recorded into one recording: the GPU LBVH (`bvh::lbvh`) into a working tree,
 //! `rounds` restructuring rounds (`rounds`: level by level, kernels `nodes_level`,
-//! `roots_bucket`, `treelets_optimize`, `treelets_climb`; γ = treelet size, doubling each round), the collapse into the output tree (`collapse`: kernels `nodes_mark`, `nodes_compact`).
+//! `treelets_optimize`, `treelets_climb`; γ = treelet size, doubling each round), the collapse
+//! into the output tree (`collapse`: kernels `nodes_mark`, `nodes_compact`).
 //! Each part has a CPU twin (`build_trbvh_cpu`), the test oracle.
 
 mod collapse;
@@ -13,7 +14,6 @@ mod dp;
 mod nodes_compact;
 mod nodes_level;
 mod nodes_mark;
-mod roots_bucket;
 mod rounds;
 mod treelets_climb;
 mod treelets_optimize;
@@ -25,7 +25,6 @@ pub use dp::{
 pub use nodes_compact::NODES_COMPACT;
 pub use nodes_level::NODES_LEVEL;
 pub use nodes_mark::NODES_MARK;
-pub use roots_bucket::ROOTS_BUCKET;
 pub use treelets_climb::TREELETS_CLIMB;
 pub use treelets_optimize::TREELETS_OPTIMIZE;
 
@@ -206,7 +205,6 @@ struct Scratch {
     levels: [wgpu::Buffer; 2],
     arrivals: wgpu::Buffer,
     schedule: wgpu::Buffer,
-    roots: wgpu::Buffer,
     waves: wgpu::Buffer,
     flags: wgpu::Buffer,
     scans: wgpu::Buffer,
@@ -231,7 +229,6 @@ impl Scratch {
             ],
             arrivals: storage_buffer_zeroed(ctx, "treelet arrivals", u64::from(capacity) * 4)?,
             schedule: indirect_buffer_zeroed(ctx, "treelet schedule", SCHEDULE_WORDS * 4)?,
-            roots: storage_buffer_zeroed(ctx, "treelet roots", u64::from(capacity) * 4)?,
             waves: storage_buffer_zeroed(ctx, "treelet waves", u64::from(capacity) * 4)?,
             flags: storage_buffer_zeroed(ctx, "collapse flags", nodes * 4)?,
             scans: storage_buffer_zeroed(ctx, "collapse scans", 2 * nodes * 4)?,
@@ -432,6 +429,8 @@ impl TrbvhBuilder {
         }
         tree.reserve(ctx, 2 * n - 1, n)?;
         self.collapse.reserve(ctx, n)?;
+        let gammas = self.settings.gammas();
+        self.rounds.reserve(ctx, n, &gammas)?;
         let scratch = self.scratch.as_ref().expect("reserved");
         let mut state = TreeletState {
             nodes: &scratch.nodes,
@@ -444,11 +443,9 @@ impl TrbvhBuilder {
             next_levels: &scratch.levels[1],
             arrivals: &scratch.arrivals,
             schedule: &scratch.schedule,
-            roots: &scratch.roots,
             waves: &scratch.waves,
         };
         let model = CostModel::from(&self.sah);
-        let gammas = self.settings.gammas();
         for (r, &gamma) in gammas.iter().enumerate() {
             if r == 0 {
                 // The first schedule's climb counts arrivals.

@@ -1,10 +1,9 @@
 //! GPU treelet restructuring rounds (Karras & Aila 2013, §3-4), processed level by level. A round
 //! schedules the tree (kernel `nodes_level`: in the first round a bottom-up climb that gives the
-//! LBVH its boxes and every node its count, cost and treelet level; in later rounds a count of
-//! the roots per level, whose levels the round before computed), buckets the roots by level
-//! (`roots_bucket`), optimizes each of the lowest levels in one indirect dispatch
-//! (`treelets_optimize`), and climbs the remaining top levels in one workgroup
-//! (`treelets_climb`). The treelet kernels also compute the next round's levels of the nodes
+//! LBVH its boxes and every node its count, cost and treelet level; in later rounds one pass over
+//! the roots, whose levels the round before computed) and buckets the roots by level as it finds
+//! them, optimizes each of the lowest levels in one indirect dispatch (`treelets_optimize`), and
+//! climbs the remaining top levels in one workgroup (`treelets_climb`). The treelet kernels also compute the next round's levels of the nodes
 //! they finish. Roots of one level are disjoint subtrees, and every level is processed after the
 //! levels below it, so the result is the one of the paper's bottom-up traversal: the CPU twin
 //! `WorkingTree::optimize_round` processes the nodes in post-order. Dispatch boundaries order
@@ -22,11 +21,12 @@ use bytemuck::{Pod, Zeroable};
 
 use super::dp::{subsets_by_size, CostModel};
 use super::nodes_level::NODES_LEVEL;
-use super::roots_bucket::ROOTS_BUCKET;
 use super::treelets_climb::TREELETS_CLIMB;
 use super::treelets_optimize::TREELETS_OPTIMIZE;
 use crate::gpu::constants::MAX_LEVEL_DISPATCHES;
-use crate::gpu::{storage_buffer, Grid, ItemCount, Kernel, Recorder};
+use crate::gpu::{
+    storage_buffer, storage_buffer_zeroed, GpuContext, Grid, ItemCount, Kernel, Recorder,
+};
 use crate::Result;
 
 /// Parameters of every kernel of a round (WGSL twin in `shaders/include/treelet_round.wgsl`).
@@ -53,12 +53,21 @@ pub struct RoundParams {
 }
 const _: () = assert!(std::mem::size_of::<RoundParams>() == 64);
 
-/// Words of the schedule buffer: roots and cursors per level (levels 1 ..= MAX_LEVEL_DISPATCHES
-/// + 1), then the indirect arguments (x, y, z) of each dispatched level.
-pub(crate) const SCHEDULE_WORDS: u64 =
-    2 * (MAX_LEVEL_DISPATCHES as u64 + 1) + 3 * MAX_LEVEL_DISPATCHES as u64;
+/// Words of the schedule buffer: the roots per level (levels 1 ..= MAX_LEVEL_DISPATCHES + 1), a
+/// ticket, then the indirect arguments (x, y, z) of each dispatched level.
+pub(crate) const SCHEDULE_WORDS: u64 = SCHEDULE_ARGS + 3 * MAX_LEVEL_DISPATCHES as u64;
 /// First word of the indirect arguments in the schedule buffer.
-const SCHEDULE_ARGS: u64 = 2 * (MAX_LEVEL_DISPATCHES as u64 + 1);
+const SCHEDULE_ARGS: u64 = MAX_LEVEL_DISPATCHES as u64 + 2;
+
+/// First slot of level `level`'s roots in the roots buffer of a tree of `n` leaves and smallest
+/// root `gamma` (WGSL twin in `treelet_round.wgsl`): level l has ⌊n / (γ + l − 1)⌋ slots, as the
+/// roots of a level are disjoint subtrees and a root of level l holds at least γ + l − 1 leaves
+/// (γ, and one more than its child of level l − 1).
+fn level_start(n: u32, gamma: u32, level: u32) -> u64 {
+    (1..level)
+        .map(|l| u64::from(n / gamma.saturating_add(l - 1)))
+        .sum()
+}
 
 /// Per-node state the rounds and the collapse share (sized for n leaves, 2n-1 nodes).
 pub(crate) struct TreeletState<'a> {
@@ -77,12 +86,10 @@ pub(crate) struct TreeletState<'a> {
     pub levels: &'a wgpu::Buffer,
     pub next_levels: &'a wgpu::Buffer,
     /// Arrival counters of the internal nodes (n words): zeroed before the first round's climb,
-    /// and by `roots_bucket` for each round's treelet climb.
+    /// which leaves them zero, and by each later round's `nodes_level` for its treelet climb.
     pub arrivals: &'a wgpu::Buffer,
     /// `SCHEDULE_WORDS` words (storage and indirect), zeroed before each round.
     pub schedule: &'a wgpu::Buffer,
-    /// The roots of the dispatched levels and the first climbed one (n words).
-    pub roots: &'a wgpu::Buffer,
     /// The climb's two waves (n words).
     pub waves: &'a wgpu::Buffer,
 }
@@ -146,14 +153,16 @@ fn default_team_below(device: wgpu::DeviceType) -> u32 {
     }
 }
 
-/// The kernels of a round.
+/// The kernels of a round and their buckets.
 pub(crate) struct TreeletRounds {
     level: Kernel<RoundParams>,
-    bucket: Kernel<RoundParams>,
     optimize: Kernel<RoundParams>,
     climb: Kernel<RoundParams>,
     /// `subsets_by_size`, read by the teams.
     subsets: wgpu::Buffer,
+    /// The roots of the dispatched levels and the first climbed one, each level in its slots
+    /// (`level_start`); grown on demand.
+    roots: Option<wgpu::Buffer>,
     pub schedule: RoundSchedule,
 }
 
@@ -161,18 +170,44 @@ impl TreeletRounds {
     pub fn new(ctx: &crate::gpu::GpuContext) -> Result<Self> {
         Ok(Self {
             level: Kernel::new(ctx, &NODES_LEVEL),
-            bucket: Kernel::new(ctx, &ROOTS_BUCKET),
             optimize: Kernel::new(ctx, &TREELETS_OPTIMIZE),
             climb: Kernel::new(ctx, &TREELETS_CLIMB),
             subsets: storage_buffer(ctx, "treelet subsets by size", &subsets_by_size())?,
+            roots: None,
             schedule: RoundSchedule::default(),
         })
     }
 
-    /// Records one round over a working tree of `count` leaves (LBVH layout) whose arrival
-    /// counters and schedule are zero: the schedule and the dispatched levels in a pass
-    /// "treelets", the climb in a pass "treelets climb" (timed apart: the one is throughput, the
-    /// other a chain of small waves). `gamma = u32::MAX` only computes boxes, counts and costs.
+    /// Levels of a round of `n` leaves and smallest root `gamma` that get a dispatch each.
+    fn dispatched(&self, n: u32, gamma: u32) -> u32 {
+        self.schedule
+            .level_dispatches
+            .unwrap_or_else(|| level_dispatches(n, gamma))
+            .min(MAX_LEVEL_DISPATCHES)
+    }
+
+    /// Grows the buckets for rounds of up to `n` leaves with these smallest roots (u32::MAX: a
+    /// round without treelets).
+    pub fn reserve(&mut self, ctx: &GpuContext, n: u32, gammas: &[u32]) -> Result<()> {
+        let words = gammas
+            .iter()
+            .filter(|&&gamma| gamma != u32::MAX)
+            .map(|&gamma| level_start(n, gamma, self.dispatched(n, gamma) + 2))
+            .max()
+            .unwrap_or(0)
+            .max(1);
+        if self.roots.as_ref().is_none_or(|r| r.size() < words * 4) {
+            self.roots = None;
+            self.roots = Some(storage_buffer_zeroed(ctx, "treelet roots", words * 4)?);
+        }
+        Ok(())
+    }
+
+    /// Records one round over a working tree of `count` leaves (LBVH layout) whose schedule is
+    /// zero (and whose arrival counters are, before the first round): the schedule and the
+    /// dispatched levels in a pass "treelets", the climb in a pass "treelets climb" (timed
+    /// apart: the one is throughput, the other a chain of small waves). `gamma = u32::MAX` only
+    /// computes boxes, counts and costs. Call `reserve` first.
     pub fn record(
         &self,
         rec: &mut Recorder<'_>,
@@ -183,11 +218,8 @@ impl TreeletRounds {
         let ctx = rec.ctx;
         let mut pass = rec.pass("treelets");
         let n = count.capacity();
-        let dispatched = self
-            .schedule
-            .level_dispatches
-            .unwrap_or_else(|| level_dispatches(n, round.gamma))
-            .min(MAX_LEVEL_DISPATCHES);
+        let dispatched = self.dispatched(n, round.gamma);
+        let roots = self.roots.as_ref().expect("reserve() allocates the roots");
         // One invocation per leaf, or per internal node when only levels are computed.
         let grid = self.level.grid(ctx, n);
         let mut params = RoundParams {
@@ -222,31 +254,19 @@ impl TreeletRounds {
                 limit,
                 state.prim_boxes,
                 state.order,
+                roots,
             ],
         );
         if round.gamma == u32::MAX {
             return;
         }
-        pass.dispatch(
-            &self.bucket,
-            grid,
-            &params,
-            &[
-                state.prim_counts,
-                state.levels,
-                state.arrivals,
-                state.schedule,
-                state.roots,
-                limit,
-            ],
-        );
         let treelet_buffers = [
             state.nodes,
             state.parents,
             state.prim_counts,
             state.costs,
             state.schedule,
-            state.roots,
+            roots,
             &self.subsets,
             state.next_levels,
         ];

@@ -1,4 +1,4 @@
-//! Treelet round step 4 (kernel `treelets_climb`; Karras & Aila 2013, §4): the levels above the
+//! Treelet round step 3 (kernel `treelets_climb`; Karras & Aila 2013, §4): the levels above the
 //! dispatched ones, climbed by one workgroup.
 
 use super::rounds::RoundParams;

@@ -1,4 +1,4 @@
-//! Treelet round step 3 (kernel `treelets_optimize`; Karras & Aila 2013, §4): the treelets of one
+//! Treelet round step 2 (kernel `treelets_optimize`; Karras & Aila 2013, §4): the treelets of one
 //! level, one invocation each, or a workgroup each in a level of few treelets.
 
 use super::rounds::RoundParams;
