@@ -149,22 +149,11 @@ fn split_plane(grid: SplitGrid, p: Piece, tried: u32) -> SplitPlane {
     return best;
 }
 
-@compute @workgroup_size(64)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x + gid.y * params.row_pitch;
-    if i >= params.count {
-        return;
-    }
-    let t = triangles[i];
-    var out = first_reference(i);
-    var end = ref_total[0];
-    if i + 1u < params.count {
-        end = first_reference(i + 1u);
-    }
-    let grid = split_grid();
-    let lo = min(t.v0, min(t.v1, t.v2));
-    let hi = max(t.v0, max(t.v1, t.v2));
-    let cells = cell_range(grid, lo, hi);
+// Splits triangle i (box [lo, hi], covering `cells`) into the references first_out .. end - 1.
+// A function of its own, called only for a triangle of several references, so that the others
+// do not pay for its piece stack (2 KiB per invocation, zero-initialized as every WGSL `var`).
+fn split_triangle(grid: SplitGrid, i: u32, t: Triangle, lo: vec3<f32>, hi: vec3<f32>, cells: CellRange, first_out: u32, end: u32) {
+    var out = first_out;
     var stack: array<Piece, MAX_PIECES>;
     stack[0] = piece_within(grid, lo, hi, cells.first, cells.last, end - out);
     var sp = 1u;
@@ -217,4 +206,28 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             }
         }
     }
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x + gid.y * params.row_pitch;
+    if i >= params.count {
+        return;
+    }
+    let t = triangles[i];
+    let out = first_reference(i);
+    var end = ref_total[0];
+    if i + 1u < params.count {
+        end = first_reference(i + 1u);
+    }
+    let lo = min(t.v0, min(t.v1, t.v2));
+    let hi = max(t.v0, max(t.v1, t.v2));
+    if end - out == 1u {
+        // Unsplit: the triangle's box (what the piece loop emits for a single piece).
+        prim_boxes[out] = Aabb(lo, 0u, hi, 0u);
+        ref_tris[out] = i;
+        return;
+    }
+    let grid = split_grid();
+    split_triangle(grid, i, t, lo, hi, cell_range(grid, lo, hi), out, end);
 }
