@@ -1,6 +1,6 @@
 // Treelet round, step 1 (Karras & Aila 2013, §4 "processing nodes bottom-up"): the schedule. A
-// bottom-up climb (one invocation per leaf, per-node arrival counters, the second arrival goes
-// on, as in bottom_up_climb.wgsl) gives every node its primitive count N and SAH cost
+// bottom-up climb (one invocation per leaf, the second arrival at a node goes on, as in
+// lbvh_climb.wgsl) gives every node its primitive count N and SAH cost
 //     C(n) = min(Ci·A(n) + C(left) + C(right),  Ct·A(n)·N(n) if N(n) <= max leaf size)
 // and its level: 0 below gamma primitives, else one more than the highest level of its children.
 // Nodes with N >= gamma root a treelet; two roots of one level are never ancestor and
@@ -12,16 +12,16 @@
 // that finishes last (a ticket in the schedule buffer; no workgroup waits for another) writes
 // each dispatched level's indirect arguments from the final counts: a workgroup per treelet
 // below params.team_below treelets, else per 32 treelets (treelets_optimize.wgsl).
-// The first round also gives the LBVH its boxes (Karras 2012 §4, as bounds_refit.wgsl does for a
-// plain LBVH): each leaf's from its primitive, each internal node's from its children, in the
-// same climb (one climb per build saved). After the first round (levels_only), boxes, counts,
-// costs and the roots' levels of the new gamma are those the treelet kernels of the round before
-// left (treelet_dp.wgsl, step 5): one invocation per internal node only buckets the roots, without
-// a climb, and zeroes the node's arrival counter for treelets_climb.wgsl (in the first round the
-// climb's second arrival at a node zeroes it).
-// Node children were written by earlier dispatches; the boxes, counts, costs and levels this
-// climb writes are shared across workgroups, so all node data goes through atomics (node
-// words, node_words.wgsl), ordered around the counter increments by storageBarriers.
+// The first round's climb also builds the LBVH over the sorted keys, as lbvh_climb.wgsl does for a
+// plain LBVH: its hierarchy (Karras 2012's radix tree and layout, found bottom-up as in Apetrei
+// 2014: radix_climb.wgsl) with the parent links, and its boxes (Karras 2012 §4), each leaf's from
+// its primitive, each internal node's from its children. After the first round (levels_only),
+// boxes, counts, costs and the roots' levels of the new gamma are those the treelet kernels of
+// the round before left (treelet_dp.wgsl, step 5): one invocation per internal node only buckets
+// the roots, without a climb, and zeroes the node's arrival counter for treelets_climb.wgsl (the
+// first round's climb leaves every arrival word zero).
+// The node data this climb writes is shared across workgroups, so it all goes through atomics
+// (node words, node_words.wgsl), ordered around the arrivals by storageBarriers.
 #include "bvh_node.wgsl"
 #include "aabb.wgsl"
 #include "treelet_round.wgsl"
@@ -33,7 +33,7 @@ const MAX_WORKGROUPS_X: u32 = 65535u;
 
 @group(0) @binding(0) var<uniform> params: RoundParams;
 @group(0) @binding(1) var<storage, read_write> node_words: array<atomic<u32>>;
-@group(0) @binding(2) var<storage, read> parents: array<u32>;
+@group(0) @binding(2) var<storage, read_write> parents: array<u32>;
 @group(0) @binding(3) var<storage, read_write> prim_counts: array<atomic<u32>>;
 @group(0) @binding(4) var<storage, read_write> costs: array<atomic<u32>>;
 @group(0) @binding(5) var<storage, read_write> levels: array<atomic<u32>>;
@@ -46,20 +46,15 @@ const MAX_WORKGROUPS_X: u32 = 65535u;
 @group(0) @binding(10) var<storage, read> order: array<u32>;
 // The roots of each bucketed level, in its slots (level_start).
 @group(0) @binding(11) var<storage, read_write> roots: array<u32>;
+// First round: the sorted keys (low word first), from which the climb finds the hierarchy.
+@group(0) @binding(12) var<storage, read> keys: array<vec2<u32>>;
 
 #include "node_words.wgsl"
+#include "radix_climb.wgsl"
 
 var<workgroup> climbing: atomic<u32>;
 var<workgroup> any_climbing: u32;
 var<workgroup> is_last: u32;
-
-fn left_child(node: u32) -> u32 {
-    return atomicLoad(&node_words[node * 8u + 3u]);
-}
-
-fn right_child(node: u32) -> u32 {
-    return atomicLoad(&node_words[node * 8u + 7u]);
-}
 
 fn is_root(node: u32) -> bool {
     return atomicLoad(&prim_counts[node]) >= params.gamma;
@@ -98,11 +93,12 @@ fn main(
 ) {
     let j = gid.x + gid.y * params.row_pitch;
     let n = min(params.count, count_limit[0]);
-    var node = n - 1u + j;
+    leaf_count = n;
     if lid == 0u {
         atomicStore(&climbing, 0u);
     }
     workgroupBarrier();
+    var r = RangeNode(0u, 0u, 0u, 0u, 0u, false);
     var is_climbing = false;
     if params.levels_only != 0u {
         // Invocation j: internal node j, whose level the round before computed; no climb.
@@ -113,6 +109,8 @@ fn main(
             }
         }
     } else if j < n {
+        r = leaf_range_node(j);
+        let node = r.node;
         let b = prim_boxes[order[j]];
         store_box(node, b.min, b.max);
         atomicStore(&node_words[node * 8u + 3u], j);
@@ -126,26 +124,30 @@ fn main(
         }
     }
     loop {
-        // Release: this node's count, cost and level are stored before the parent's counter is
-        // incremented.
+        // Release: this node's box, count, cost and level are stored before the arrival.
         storageBarrier();
+        var sibling = 0u;
         if is_climbing {
-            let parent = parents[node];
-            if atomicAdd(&arrivals[parent], 1u) == 0u {
+            sibling = arrive(r);
+            if sibling == 0u {
                 // First arrival: the sibling's invocation will finish the parent.
                 is_climbing = false;
                 atomicSub(&climbing, 1u);
-            } else {
-                // Second: zeroed for the treelet climb.
-                atomicStore(&arrivals[parent], 0u);
-                node = parent;
             }
         }
-        // Acquire: the sibling's data, stored before its increment, is visible now.
+        // Acquire: the sibling's data, stored before its arrival, is visible now.
         storageBarrier();
         if is_climbing {
-            let left = left_child(node);
-            let right = right_child(node);
+            let split = parent_split(r);
+            r = parent_range_node(r, sibling);
+            let node = r.node;
+            let pair = range_children(r, split);
+            let left = pair.x;
+            let right = pair.y;
+            atomicStore(&node_words[node * 8u + 3u], left);
+            atomicStore(&node_words[node * 8u + 7u], right);
+            parents[left] = node;
+            parents[right] = node;
             let lo = min(load_min(left), load_min(right));
             let hi = max(load_max(left), load_max(right));
             store_box(node, lo, hi);

@@ -4,8 +4,8 @@
 // several primitives) given its parent links and the list of its leaves.
 //
 // One invocation per leaf stores the leaf's box (union of its triangles) and climbs parent links
-// with `climb` (bottom_up_climb.wgsl, shared with bounds_refit: atomics and storageBarriers order
-// the box stores and counter increments). Child and leaf words are only read. Counters must start
+// with `climb` (bottom_up_climb.wgsl: atomics and storageBarriers order the box stores and
+// counter increments, as in lbvh_climb.wgsl). Child and leaf words are only read. Counters must start
 // at zero.
 #include "bvh_node.wgsl"
 #include "items.wgsl"

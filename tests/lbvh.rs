@@ -64,9 +64,10 @@ fn assert_sah_close_to_cpu_twin(bvh: &Bvh, triangles: &[Triangle], key_bits: u32
 /// - Morton keys: each within one grid cell per axis of the CPU key (the grid scale is a
 ///   division, which GPUs may round differently from the CPU), at the builder's key width;
 /// - radix sort: the CPU sort of the GPU's keys gives the GPU's sorted keys and values exactly;
-/// - hierarchy: the CPU emission from the GPU's sorted keys gives the GPU's parents exactly;
-/// - bottom-up bounds: the CPU assembly from that hierarchy and the GPU's order gives the GPU's
-///   nodes bit for bit (box unions are min/max, exact on every device);
+/// - hierarchy: Karras's top-down emission on the CPU from the GPU's sorted keys gives the
+///   parents the GPU's bottom-up climb found, exactly;
+/// - bounds: the CPU assembly from that hierarchy and the GPU's order gives the GPU's nodes bit
+///   for bit (children, and boxes: unions are min/max, exact on every device);
 /// - the whole tree: valid, and its SAH within 0.5 % of the CPU twin's.
 fn check_stages_against_cpu_twins(triangles: Vec<Triangle>) {
     check_stages_with_key_bits(triangles, LBVH_KEY_BITS);

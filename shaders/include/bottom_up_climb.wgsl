@@ -1,5 +1,5 @@
-// The bottom-up climb of bounds_refit and nodes_refit (Karras 2012 §4): each invocation whose leaf
-// box is stored climbs parent links; a per-node atomic counter lets only the second arrival merge
+// The bottom-up climb of nodes_refit (Karras 2012 §4): each invocation whose leaf box is stored
+// climbs parent links; a per-node atomic counter lets only the second arrival merge
 // both children's boxes and go on. WGSL atomics are relaxed, so boxes go through `node_words`
 // (node_words.wgsl) and storageBarriers order the box stores before the counter increment
 // (release) and the increment before the sibling's box loads (acquire). Barriers need uniform

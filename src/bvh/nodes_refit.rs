@@ -1,6 +1,6 @@
 //! Refits: a tree keeps its topology and only its boxes follow moved triangles, recomputed on the
-//! GPU bottom-up (kernel `nodes_refit`: the climb and memory ordering of the LBVH's
-//! `bounds_refit`, generalized to leaves of several triangles). Animated scenes with fixed
+//! GPU bottom-up (kernel `nodes_refit`: a climb over parent links with the memory ordering of the
+//! LBVH's `lbvh_climb`, for leaves of several triangles). Animated scenes with fixed
 //! topology build their tree once, at the first frame (LBVH or TRBVH), and refit it every frame.
 //!
 //! Refitting the compacted tree needs its parent links and its list of leaves, which no build

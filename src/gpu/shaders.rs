@@ -42,6 +42,10 @@ const INCLUDES: &[(&str, &str)] = &[
         include_str!("../../shaders/include/bottom_up_climb.wgsl"),
     ),
     (
+        "radix_climb.wgsl",
+        include_str!("../../shaders/include/radix_climb.wgsl"),
+    ),
+    (
         "split_grid.wgsl",
         include_str!("../../shaders/include/split_grid.wgsl"),
     ),

@@ -1,20 +1,18 @@
 //! GPU LBVH construction (Karras 2012, "Maximizing Parallelism in the Construction of BVHs, Octrees,
 //! and k-d Trees"), every stage a WGSL kernel: centroid bounds → Morton keys → radix sort →
-//! hierarchy emission → bottom-up bounds. Each stage has a CPU twin; `build_lbvh_cpu` chains them
+//! hierarchy and bounds in one bottom-up climb (Apetrei 2014). Each stage has a CPU twin; `build_lbvh_cpu` chains them
 //! into the reference tree (tests compare each GPU stage with its twin fed the GPU's own input).
 //!
 //! Output layout (the project's `BvhNode` layout): internal nodes 0..n-2 (root 0), leaf j at node
 //! n-1+j holding `prim_indices[j]`, the primitives in Morton order.
 
-mod bounds_refit;
 mod centroids_reduce;
-mod lbvh_hierarchy;
+mod lbvh_climb;
 mod morton_compute;
 mod triangles_bounds;
 
-pub use bounds_refit::{assemble_lbvh_cpu, BOUNDS_REFIT};
 pub use centroids_reduce::{box_of_words, centroid_bounds_cpu, CentroidsReduce, CENTROIDS_REDUCE};
-pub use lbvh_hierarchy::{hierarchy_cpu, Hierarchy, LBVH_HIERARCHY};
+pub use lbvh_climb::{assemble_lbvh_cpu, hierarchy_cpu, Hierarchy, LBVH_CLIMB};
 pub use morton_compute::{
     morton_key, morton_keys_cpu, LBVH_KEY_BITS, MORTON_BITS, MORTON_COMPUTE, TRBVH_KEY_BITS,
 };
@@ -22,8 +20,7 @@ pub use triangles_bounds::{
     prim_boxes_cpu, TriangleBoundsOutput, TrianglesBounds, TRIANGLES_BOUNDS,
 };
 
-use bounds_refit::BoundsRefit;
-use lbvh_hierarchy::LbvhHierarchy;
+use lbvh_climb::{ClimbBuffers, LbvhClimb};
 use morton_compute::MortonCompute;
 
 use super::Bvh;
@@ -107,15 +104,14 @@ pub struct LbvhBuilder {
     centroids: CentroidsReduce,
     morton: MortonCompute,
     sort: RadixSort,
-    hierarchy: LbvhHierarchy,
-    refit: BoundsRefit,
+    climb: LbvhClimb,
     scratch: Option<Scratch>,
     /// Parameters of the builds this builder records and submits itself (`build`).
     params: ParamSlab,
 }
 
-/// Timestamped passes one build records (bounds, morton, sort, hierarchy, refit).
-pub const LBVH_PASSES: u32 = 5;
+/// Timestamped passes one build records (bounds, morton, sort, hierarchy).
+pub const LBVH_PASSES: u32 = 4;
 
 impl LbvhBuilder {
     pub fn new(ctx: &GpuContext) -> Self {
@@ -124,8 +120,7 @@ impl LbvhBuilder {
             centroids: CentroidsReduce::new(ctx),
             morton: MortonCompute::new(ctx, LBVH_KEY_BITS),
             sort: RadixSort::new(ctx),
-            hierarchy: LbvhHierarchy::new(ctx),
-            refit: BoundsRefit::new(ctx),
+            climb: LbvhClimb::new(ctx),
             scratch: None,
             params: ParamSlab::new(ctx),
         }
@@ -163,7 +158,7 @@ impl LbvhBuilder {
         timer.read(ctx)
     }
 
-    /// Records a whole build over `geometry`'s triangles into `tree` (5 timestamped passes),
+    /// Records a whole build over `geometry`'s triangles into `tree` (4 timestamped passes),
     /// grown as needed: internal nodes 0..n-2, leaf j at node n-1+j.
     pub fn record(
         &mut self,
@@ -195,25 +190,24 @@ impl LbvhBuilder {
         nodes: &wgpu::Buffer,
         order: &wgpu::Buffer,
     ) -> Result<()> {
-        self.record_hierarchy_into(rec, input, nodes, order)?;
-        self.record_refit(rec, input.count(), nodes, order);
+        self.record_sorted_into(rec, input, order)?;
+        self.record_climb(rec, input.count(), nodes, order);
         Ok(())
     }
 
-    /// Like `record_into` without the boxes: the internal nodes' children in `nodes` and the
-    /// sorted primitive order in `order`, for a caller that computes the boxes in a bottom-up
-    /// climb of its own (the treelet rounds' first schedule does, with its counts and costs).
-    /// `parents` and `prim_boxes` hold the links and the boxes to climb with.
-    pub fn record_hierarchy_into(
+    /// Like `record_into` without the tree: the sorted keys (`keys()`) and the sorted primitive
+    /// order in `order`, for a caller that builds the hierarchy and boxes in a bottom-up climb of
+    /// its own (the treelet rounds' first schedule does, with its counts and costs, from
+    /// `keys()` and `prim_boxes()` into `parents()`).
+    pub fn record_sorted_into(
         &mut self,
         rec: &mut Recorder<'_>,
         input: LbvhInput<'_>,
-        nodes: &wgpu::Buffer,
         order: &wgpu::Buffer,
     ) -> Result<()> {
         self.reserve(rec.ctx, input.count().capacity())?;
         self.record_keys(rec, input, order);
-        self.record_hierarchy(rec, input.count(), nodes, order)
+        self.record_sort(rec, input.count(), order)
     }
 
     /// Grows the scratch space to hold `capacity` primitives.
@@ -248,6 +242,12 @@ impl LbvhBuilder {
         self.scratch.as_ref().map(|s| &s.parents)
     }
 
+    /// The sorted Morton keys of the last build (`[u32; 2]` each, low word first); valid after
+    /// `reserve`.
+    pub fn keys(&self) -> Option<&wgpu::Buffer> {
+        self.scratch.as_ref().map(|s| &s.keys)
+    }
+
     /// Like `build`, but in two submissions with every intermediate buffer read back (tests).
     pub fn build_stages(&mut self, ctx: &GpuContext, geometry: &Geometry) -> Result<LbvhStages> {
         let n = geometry.triangle_count;
@@ -266,8 +266,8 @@ impl LbvhBuilder {
         let box_words: Vec<u32> = read_buffer(ctx, &scratch.centroid_box, 8)?;
         let keys = read_keys(ctx, &scratch.keys, n)?;
         let mut rec = Recorder::new(ctx, &mut params, None);
-        self.record_hierarchy(&mut rec, input.count(), &tree.nodes, &tree.prim_indices)?;
-        self.record_refit(&mut rec, input.count(), &tree.nodes, &tree.prim_indices);
+        self.record_sort(&mut rec, input.count(), &tree.prim_indices)?;
+        self.record_climb(&mut rec, input.count(), &tree.nodes, &tree.prim_indices);
         rec.submit();
         let scratch = self.scratch.as_ref().expect("reserved");
         let sorted_prims: Vec<u32> = read_buffer(ctx, &tree.prim_indices, n as usize)?;
@@ -319,26 +319,21 @@ impl LbvhBuilder {
         );
     }
 
-    /// Stages 3-4: sort and hierarchy emission into `nodes`, with the leaves' primitives in
-    /// `order`.
-    fn record_hierarchy(
+    /// Stage 3: the sort of the keys, with the leaves' primitives in `order`.
+    fn record_sort(
         &mut self,
         rec: &mut Recorder<'_>,
         count: ItemCount<'_>,
-        nodes: &wgpu::Buffer,
         order: &wgpu::Buffer,
     ) -> Result<()> {
         let scratch = self.scratch.as_ref().expect("reserved");
         self.sort
-            .record(rec, &scratch.keys, order, count, self.morton.key_bits)?;
-        let mut pass = rec.pass("hierarchy");
-        self.hierarchy
-            .record(&mut pass, &scratch.keys, count, nodes, &scratch.parents);
-        Ok(())
+            .record(rec, &scratch.keys, order, count, self.morton.key_bits)
     }
 
-    /// Stage 5: bottom-up bounds into `nodes`.
-    fn record_refit(
+    /// Stages 4-5: hierarchy and bounds into `nodes` in one climb (pass "hierarchy"). The
+    /// arrival words are zero from their allocation, and every climb leaves them zero.
+    fn record_climb(
         &self,
         rec: &mut Recorder<'_>,
         count: ItemCount<'_>,
@@ -346,16 +341,17 @@ impl LbvhBuilder {
         order: &wgpu::Buffer,
     ) {
         let scratch = self.scratch.as_ref().expect("reserved");
-        rec.encoder().clear_buffer(&scratch.arrivals, 0, None);
-        let mut pass = rec.pass("refit");
-        self.refit.record(
-            &mut pass,
-            &scratch.prim_boxes,
+        self.climb.record(
+            &mut rec.pass("hierarchy"),
             count,
-            order,
-            &scratch.parents,
-            nodes,
-            &scratch.arrivals,
+            &ClimbBuffers {
+                keys: &scratch.keys,
+                order,
+                prim_boxes: &scratch.prim_boxes,
+                nodes,
+                parents: &scratch.parents,
+                arrivals: &scratch.arrivals,
+            },
         );
     }
 }

@@ -404,13 +404,13 @@ impl TrbvhBuilder {
                 (count, LbvhInput::PrimBoxes(count))
             }
         };
-        // The first round's schedule computes the boxes with its counts and costs; a test that
-        // reads the LBVH back has the LBVH's own refit compute them first (the same boxes).
+        // The first round's schedule builds the LBVH (hierarchy and boxes) with its counts and
+        // costs; a test that reads the LBVH back has the LBVH's own climb build it first (the
+        // same tree, which the first round then builds again).
         if lbvh_out.is_some() {
             self.lbvh.record_into(rec, input, &nodes, &order)?;
         } else {
-            self.lbvh
-                .record_hierarchy_into(rec, input, &nodes, &order)?;
+            self.lbvh.record_sorted_into(rec, input, &order)?;
         }
         self.last_capacity = n;
         self.last_split = split_total.is_some();
@@ -435,6 +435,7 @@ impl TrbvhBuilder {
         let mut state = TreeletState {
             nodes: &scratch.nodes,
             prim_boxes: self.lbvh.prim_boxes().expect("reserved"),
+            keys: self.lbvh.keys().expect("reserved"),
             order: &scratch.order,
             parents: self.lbvh.parents().expect("built"),
             prim_counts: &scratch.prim_counts,

@@ -1,6 +1,7 @@
 //! GPU treelet restructuring rounds (Karras & Aila 2013, §3-4), processed level by level. A round
-//! schedules the tree (kernel `nodes_level`: in the first round a bottom-up climb that gives the
-//! LBVH its boxes and every node its count, cost and treelet level; in later rounds one pass over
+//! schedules the tree (kernel `nodes_level`: in the first round a bottom-up climb that builds the
+//! LBVH from the sorted keys, its hierarchy and boxes, and gives every node its count, cost and
+//! treelet level; in later rounds one pass over
 //! the roots, whose levels the round before computed) and buckets the roots by level as it finds
 //! them, optimizes each of the lowest levels in one indirect dispatch (`treelets_optimize`), and
 //! climbs the remaining top levels in one workgroup (`treelets_climb`). The treelet kernels also compute the next round's levels of the nodes
@@ -71,12 +72,14 @@ fn level_start(n: u32, gamma: u32, level: u32) -> u64 {
 
 /// Per-node state the rounds and the collapse share (sized for n leaves, 2n-1 nodes).
 pub(crate) struct TreeletState<'a> {
-    /// The working tree: the LBVH's children (the first round computes the boxes), then the
-    /// rounds' topology.
+    /// The working tree: the LBVH (which the first round builds), then the rounds' topology.
     pub nodes: &'a wgpu::Buffer,
-    /// The primitive boxes and the primitive of each leaf (the LBVH's sorted order).
+    /// The primitive boxes, the sorted keys and the primitive of each leaf (the keys' order),
+    /// from which the first round builds the LBVH.
     pub prim_boxes: &'a wgpu::Buffer,
+    pub keys: &'a wgpu::Buffer,
     pub order: &'a wgpu::Buffer,
+    /// The parent links (the first round writes the LBVH's).
     pub parents: &'a wgpu::Buffer,
     pub prim_counts: &'a wgpu::Buffer,
     pub costs: &'a wgpu::Buffer,
@@ -255,6 +258,7 @@ impl TreeletRounds {
                 state.prim_boxes,
                 state.order,
                 roots,
+                state.keys,
             ],
         );
         if round.gamma == u32::MAX {
