@@ -51,7 +51,6 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x + gid.y * params.row_pitch;
     let node_count = 2u * min(params.leaf_count, count_limit[0]) - 1u;
     if i == 0u {
-        let last = node_count - 1u;
         tree_counts[0] = totals[KEPT];
         tree_counts[1] = totals[LEAF_PRIMS];
     }
