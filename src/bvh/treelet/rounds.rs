@@ -1,14 +1,14 @@
 //! GPU treelet restructuring rounds (Karras & Aila 2013, §3-4), processed level by level. A round
 //! schedules the tree (kernel `nodes_level`: in the first round a bottom-up climb that builds the
 //! LBVH from the sorted keys, its hierarchy and boxes, and gives every node its count, cost and
-//! treelet level; in later rounds one pass over
-//! the roots, whose levels the round before computed) and buckets the roots by level as it finds
-//! them, optimizes each of the lowest levels in one indirect dispatch (`treelets_optimize`), and
-//! climbs the remaining top levels in one workgroup (`treelets_climb`). The treelet kernels also compute the next round's levels of the nodes
-//! they finish. Roots of one level are disjoint subtrees, and every level is processed after the
-//! levels below it, so the result is the one of the paper's bottom-up traversal: the CPU twin
-//! `WorkingTree::optimize_round` processes the nodes in post-order. Dispatch boundaries order
-//! memory, so the treelet kernels read and write node data with plain loads and stores, not
+//! treelet level; in later rounds one pass over the roots, whose levels the round before
+//! computed) and buckets the roots by level as it finds them, optimizes each of the lowest levels
+//! in one indirect dispatch (`treelets_optimize`), and climbs the remaining top levels in one
+//! workgroup (`treelets_climb`). The treelet kernels also compute the next round's levels of the
+//! nodes they finish. Roots of one level are disjoint subtrees, and every level is processed
+//! after the levels below it, so the result is the one of the paper's bottom-up traversal: the
+//! CPU twin `WorkingTree::optimize_round` processes the nodes in post-order. Dispatch boundaries
+//! order memory, so the treelet kernels read and write node data with plain loads and stores, not
 //! atomics.
 //!
 //! Who optimizes a treelet: a level (or a climbed wave) of many treelets gives each its own
@@ -88,8 +88,9 @@ pub(crate) struct TreeletState<'a> {
     /// every node they finish); a node below γ has no level.
     pub levels: &'a wgpu::Buffer,
     pub next_levels: &'a wgpu::Buffer,
-    /// Arrival counters of the internal nodes (n words): zeroed before the first round's climb,
-    /// which leaves them zero, and by each later round's `nodes_level` for its treelet climb.
+    /// Arrival words (n): per split in the first round's climb (`radix_climb.wgsl`), per internal
+    /// node in the treelet climbs. Zero before the first round's climb, which leaves them zero;
+    /// zeroed again by each later round's `nodes_level` for its treelet climb.
     pub arrivals: &'a wgpu::Buffer,
     /// `SCHEDULE_WORDS` words (storage and indirect), zeroed before each round.
     pub schedule: &'a wgpu::Buffer,
@@ -294,5 +295,98 @@ impl TreeletRounds {
             &params,
             &climb_buffers,
         );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+    use rand::{Rng, SeedableRng};
+    use rand_pcg::Pcg64;
+
+    use super::level_start;
+    use crate::bvh::lbvh::{build_lbvh_from_boxes_cpu, TRBVH_KEY_BITS};
+    use crate::bvh::treelet::{optimize_lbvh_cpu, CostModel, TreeletSettings, WorkingTree};
+    use crate::bvh::SahParams;
+    use crate::geometry::Aabb;
+
+    /// Leaves below each node and each node's treelet level for smallest root `gamma` (0 below
+    /// gamma leaves, else one more than its children's highest), from the topology alone.
+    fn levels(tree: &WorkingTree, gamma: u32) -> (Vec<u32>, Vec<u32>) {
+        let count = tree.nodes.len();
+        let (mut leaves, mut levels) = (vec![0u32; count], vec![0u32; count]);
+        let mut stack = vec![(0u32, false)];
+        while let Some((node, expanded)) = stack.pop() {
+            let n = tree.nodes[node as usize];
+            let (l, r) = n.children();
+            if n.is_leaf() {
+                leaves[node as usize] = 1;
+            } else if !expanded {
+                stack.extend([(node, true), (l, false), (r, false)]);
+            } else {
+                let (l, r) = (l as usize, r as usize);
+                let i = node as usize;
+                leaves[i] = leaves[l] + leaves[r];
+                if leaves[i] >= gamma {
+                    let of = |c: usize| if leaves[c] >= gamma { levels[c] } else { 0 };
+                    levels[i] = 1 + of(l).max(of(r));
+                }
+            }
+        }
+        (leaves, levels)
+    }
+
+    /// Boxes of `n` triangles: uniform, in two far clusters, or all at one point.
+    fn boxes(n: usize, kind: u32, seed: u64) -> Vec<Aabb> {
+        let mut rng = Pcg64::seed_from_u64(seed);
+        (0..n)
+            .map(|i| {
+                let c = match kind {
+                    0 => Vec3::new(rng.random(), rng.random(), rng.random()),
+                    1 => {
+                        let far = if i % 5 == 0 { 1000.0 } else { 0.0 };
+                        Vec3::new(rng.random::<f32>() + far, rng.random(), rng.random())
+                    }
+                    _ => Vec3::ZERO,
+                };
+                Aabb::new(c, c + Vec3::splat(0.01))
+            })
+            .collect()
+    }
+
+    /// The slots `level_start` gives each level hold all of its roots, in LBVHs and in the trees
+    /// after restructuring rounds (whose levels the next round buckets), for several gammas.
+    #[test]
+    fn level_slots_hold_every_root() {
+        let model = CostModel::from(&SahParams::default());
+        for (kind, n) in [(0, 3000), (1, 3000), (2, 700), (0, 257)] {
+            let (lbvh, parents) =
+                build_lbvh_from_boxes_cpu(&boxes(n, kind, 7 + n as u64), TRBVH_KEY_BITS);
+            let lbvh = WorkingTree::from_lbvh(lbvh, parents);
+            for rounds in 0..3 {
+                let settings = TreeletSettings {
+                    treelet_size: 7,
+                    rounds,
+                    split_percent: 0,
+                };
+                let tree = optimize_lbvh_cpu(lbvh.clone(), &settings, &model);
+                for gamma in [3u32, 5, 7, 14, 28, 56] {
+                    let (leaves, levels) = levels(&tree, gamma);
+                    let top = levels.iter().copied().max().unwrap_or(0);
+                    for level in 1..=top {
+                        let roots = (0..tree.nodes.len())
+                            .filter(|&i| leaves[i] >= gamma && levels[i] == level)
+                            .count() as u64;
+                        let slots = level_start(n as u32, gamma, level + 1)
+                            - level_start(n as u32, gamma, level);
+                        assert!(
+                            roots <= slots,
+                            "kind {kind}, n {n}, {rounds} rounds, gamma {gamma}: level {level} \
+                             has {roots} roots in {slots} slots"
+                        );
+                    }
+                }
+            }
+        }
     }
 }
