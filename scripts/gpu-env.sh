@@ -1,7 +1,8 @@
-# Sourced by the scripts that run on a lent GPU (gpu-layouts.sh, gpu-schedules.sh): sets `out` (the
-# folder whose files come back, $OUT) and `bin` (the treelet binary). With TREELET set to a treelet
-# binary it uses that one here (dry runs, e.g. on lavapipe); otherwise .gpu/run.sh unpacks the
-# binary and the scenes into /tmp/treelet-gpu and checks that the GPU opens.
+# Sourced by the scripts that run on a lent GPU (gpu-layouts.sh, gpu-schedules.sh,
+# gpu-profile.sh): sets `out` (the folder whose files come back, $OUT) and `bin` (the treelet
+# binary). With TREELET set to a treelet binary it uses that one here (dry runs, e.g. on
+# lavapipe); otherwise .gpu/run.sh unpacks the binary and the scenes into /tmp/treelet-gpu and
+# checks that the GPU opens.
 out=${OUT:-/tmp/out}
 mkdir -p "$out"
 bin=${TREELET:-}

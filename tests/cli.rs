@@ -124,6 +124,7 @@ fn bench_prints_json_lines() {
             assert!(record.get(key).is_some(), "missing {key} in {record}");
         }
         assert_eq!(record["valid"], true);
+        assert!(record.get("dispatch_ms").is_none(), "{record}");
         assert_eq!(record["triangles"], 36);
         assert_eq!(record["repeats"], 3);
         assert_eq!(record["warmup_ms"], 50.0);
@@ -198,6 +199,76 @@ fn bench_compares_round_schedules_on_the_same_tree() {
         assert_eq!(record["valid"], true);
         assert_eq!(record["sah"], records[1]["sah"], "{record}");
         assert_eq!(record["nodes"], records[1]["nodes"], "{record}");
+    }
+}
+
+/// `bench --profile-dispatches` times every dispatch on its own: `dispatch_ms` lists them in
+/// order, as many per stage as the stage's dispatch count, each a declared kernel, and the
+/// stage times are their sums.
+#[test]
+fn bench_profiles_every_dispatch() {
+    let records = bench_records(&[
+        "--scene",
+        "field-10k",
+        "--builder",
+        "lbvh,trbvh,trbvh-split",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--spp",
+        "1",
+        "--repeats",
+        "1",
+        "--warmup-ms",
+        "0",
+        "--profile-dispatches",
+    ]);
+    let declared: Vec<&str> = treelet::kernels::ALL.iter().map(|k| k.name).collect();
+    for record in &records {
+        assert_eq!(record["valid"], true);
+        let dispatches = record["dispatch_ms"].as_array().expect("dispatch_ms");
+        assert_eq!(
+            dispatches.len() as u64,
+            record["dispatches"].as_u64().unwrap(),
+            "{record}"
+        );
+        let kernels: Vec<&str> = dispatches
+            .iter()
+            .map(|d| d["kernel"].as_str().unwrap())
+            .collect();
+        for kernel in &kernels {
+            assert!(declared.contains(kernel), "{kernel} in {record}");
+        }
+        assert_eq!(kernels[0], "triangles_bounds", "{record}");
+        let morton = kernels.iter().position(|&k| k == "morton_compute").unwrap();
+        assert_eq!(kernels[morton + 1], "keys_histogram", "{record}");
+        for (stage, count) in record["stages_dispatches"].as_object().unwrap() {
+            let of_stage: Vec<&serde_json::Value> = dispatches
+                .iter()
+                .filter(|d| d["stage"] == stage.as_str())
+                .collect();
+            assert_eq!(of_stage.len() as u64, count.as_u64().unwrap(), "{stage}");
+            if let Some(total) = record["stages_ms"][stage].as_f64() {
+                let sum: f64 = of_stage.iter().map(|d| d["ms"].as_f64().unwrap()).sum();
+                assert!(
+                    (sum - total).abs() <= 1e-9 * total.max(1.0),
+                    "{stage}: {sum} vs {total}"
+                );
+            }
+        }
+        if record["builder"] != "lbvh" {
+            for kernel in [
+                "nodes_level",
+                "treelets_optimize",
+                "treelets_climb",
+                "nodes_mark",
+                "counts_scan",
+                "nodes_compact",
+            ] {
+                assert!(kernels.contains(&kernel), "{kernel} in {record}");
+            }
+        }
     }
 }
 

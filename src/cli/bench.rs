@@ -56,6 +56,10 @@ pub struct BenchArgs {
     /// devices); a comma-separated list to compare. The tree is the same for every value
     #[arg(long, value_delimiter = ',')]
     team_below: Vec<u32>,
+    /// Time every dispatch on its own (each in a compute pass of its own, which may cost a little
+    /// more than the passes of a normal build) and list them in `dispatch_ms`
+    #[arg(long)]
+    pub(super) profile_dispatches: bool,
 }
 
 impl BenchArgs {
@@ -138,6 +142,9 @@ struct BenchRecord {
     /// few microseconds besides its work).
     stages_dispatches: BTreeMap<String, u32>,
     dispatches: u32,
+    /// With --profile-dispatches: every dispatch of the median build, in order.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    dispatch_ms: Option<Vec<DispatchTime>>,
     /// SAH of the binary tree.
     sah: f32,
     /// Wide layout: SAH of the wide tree (greedy collapse, as converted) and of the SAH-optimal
@@ -157,6 +164,14 @@ struct BenchRecord {
     trace_wall_ms: f64,
     mrays_per_s: Option<f64>,
     mrays_per_s_spread: Option<Spread>,
+}
+
+/// One dispatch of a build timed on its own: its stage, kernel and GPU time.
+#[derive(Serialize)]
+struct DispatchTime {
+    stage: String,
+    kernel: &'static str,
+    ms: Option<f64>,
 }
 
 pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
@@ -249,6 +264,19 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
         let trace_ms: Option<Vec<f64>> = traces.iter().map(|t| t.trace_ms).collect();
         let mrays: Option<Vec<f64>> = traces.iter().map(TraceStats::mrays_per_s).collect();
         let stats = median_trace(traces);
+        let dispatch_ms = args.profile_dispatches.then(|| {
+            report
+                .stages
+                .iter()
+                .filter_map(|s| {
+                    s.kernel.map(|kernel| DispatchTime {
+                        stage: s.label.clone(),
+                        kernel,
+                        ms: s.ms,
+                    })
+                })
+                .collect()
+        });
         let stages = aggregate_stages(report.stages);
         let record = BenchRecord {
             scene: scene.name.clone(),
@@ -283,6 +311,7 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
                 .map(|s| (s.label.clone(), s.dispatches))
                 .collect(),
             dispatches: stages.iter().map(|s| s.dispatches).sum(),
+            dispatch_ms,
             sah: sah_cost(&bvh, &params),
             wide_sah: wide_sah.map(|c| c.0),
             wide_sah_optimal: wide_sah.map(|c| c.1),

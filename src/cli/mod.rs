@@ -252,14 +252,17 @@ fn parse_update_mode(name: &str) -> std::result::Result<treelet::bvh::UpdateMode
 }
 
 pub fn run(cli: Cli) -> Result<()> {
-    let gpu = || {
+    let adapter = cli.adapter.clone();
+    let gpu_with = |profile_dispatches| {
         GpuContext::new(&GpuOptions {
-            adapter: cli.adapter.clone(),
+            adapter: adapter.clone(),
+            profile_dispatches,
         })
     };
+    let gpu = || gpu_with(false);
     match cli.command.unwrap_or_else(default_command) {
         Command::Render(args) => render::run(&gpu()?, &args),
-        Command::Bench(args) => bench::run(&gpu()?, &args),
+        Command::Bench(args) => bench::run(&gpu_with(args.profile_dispatches)?, &args),
         Command::Scenes => {
             for entry in treelet::scene::SCENES {
                 println!("{:<16} {}", entry.name, entry.description);

@@ -41,7 +41,10 @@ pub fn run(adapter: Option<String>, args: ViewArgs) -> Result<()> {
     treelet::app::run(ViewerOptions {
         scene: args.scene,
         builder: args.builder,
-        gpu: GpuOptions { adapter },
+        gpu: GpuOptions {
+            adapter,
+            profile_dispatches: false,
+        },
         window_size: (args.width, args.height),
         screenshot: args.screenshot,
         exit_after_frames: args.exit_after_frames,

@@ -14,6 +14,8 @@ use crate::{Error, Result};
 pub struct GpuOptions {
     /// Case-insensitive substring of the adapter name to use (also read from `TREELET_ADAPTER`).
     pub adapter: Option<String>,
+    /// Time every dispatch on its own (`GpuTimer`): a profiling mode for `bench`.
+    pub profile_dispatches: bool,
 }
 
 /// An open device with what the rest of the crate needs to know about it.
@@ -24,6 +26,8 @@ pub struct GpuContext {
     pub info: wgpu::AdapterInfo,
     /// Timestamp queries are available (otherwise timings read "n/a").
     pub timestamps: bool,
+    /// Timers time every dispatch in a pass of its own (`GpuOptions::profile_dispatches`).
+    pub profile_dispatches: bool,
     /// Kernels by (file, entry point), compiled once per device.
     kernels: Mutex<HashMap<(&'static str, &'static str), CompiledKernel>>,
     /// The `count_limit` of kernels whose item count is known when recording (`ItemCount`):
@@ -80,7 +84,10 @@ impl GpuContext {
             info.driver,
             info.driver_info
         );
-        Self::from_device(adapter, device, queue)
+        Ok(Self {
+            profile_dispatches: options.profile_dispatches,
+            ..Self::from_device(adapter, device, queue)?
+        })
     }
 
     /// The limits a device needs for every kernel of the crate: wgpu's defaults, with as many
@@ -136,6 +143,7 @@ impl GpuContext {
             device,
             queue,
             timestamps,
+            profile_dispatches: false,
             info,
             kernels: Mutex::default(),
         })

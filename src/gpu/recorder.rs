@@ -52,30 +52,25 @@ impl<'a> Recorder<'a> {
         &mut self.encoder
     }
 
-    /// Opens a compute pass named `label`, timestamped when the recording has a timer.
+    /// Opens a compute pass named `label`, timestamped when the recording has a timer (when the
+    /// timer profiles dispatches, each dispatch gets a timed pass of its own instead).
     pub fn pass(&mut self, label: &str) -> Pass<'_> {
         debug_assert!(
             !self.resolved,
             "pass '{label}' after the timer was resolved"
         );
-        let label = format!("{}{label}", self.prefix);
-        let timestamp_writes = self.timer.as_deref_mut().and_then(|t| t.pass(&label));
-        let pass = self
-            .encoder
-            .begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some(&label),
-                timestamp_writes,
-            })
-            .forget_lifetime();
-        Pass {
-            pass,
+        let mut pass = Pass {
+            pass: None,
+            label: format!("{}{label}", self.prefix),
+            encoder: &mut self.encoder,
+            timer: self.timer.as_deref_mut(),
             ctx: self.ctx,
             params: self.params,
-            dispatches: self
-                .timer
-                .as_deref_mut()
-                .and_then(GpuTimer::last_dispatches),
+        };
+        if !pass.per_dispatch() {
+            pass.begin(None);
         }
+        pass
     }
 
     /// Submits what is recorded so far and goes on in a new command encoder: for the few steps
@@ -115,18 +110,50 @@ impl<'a> Recorder<'a> {
     }
 }
 
-/// A compute pass of a recording.
+/// A compute pass of a recording (or, when its timer profiles dispatches, one per dispatch).
 pub struct Pass<'r> {
-    pass: wgpu::ComputePass<'static>,
+    /// The open wgpu pass (None before the first dispatch when dispatches are timed one by one).
+    pass: Option<wgpu::ComputePass<'static>>,
+    label: String,
+    encoder: &'r mut wgpu::CommandEncoder,
+    timer: Option<&'r mut GpuTimer>,
     ctx: &'r GpuContext,
     params: &'r mut ParamSlab,
-    /// The timed pass's dispatch count (with a timer).
-    dispatches: Option<&'r mut u32>,
 }
 
 impl<'r> Pass<'r> {
     pub fn ctx(&self) -> &'r GpuContext {
         self.ctx
+    }
+
+    fn per_dispatch(&self) -> bool {
+        self.timer.as_deref().is_some_and(GpuTimer::per_dispatch)
+    }
+
+    /// Ends the open wgpu pass, if any, and opens the next one (timed; for one dispatch of
+    /// `kernel` when dispatches are timed one by one).
+    fn begin(&mut self, kernel: Option<&'static str>) {
+        drop(self.pass.take());
+        let timestamp_writes = self
+            .timer
+            .as_deref_mut()
+            .and_then(|t| t.pass(&self.label, kernel));
+        self.pass = Some(
+            self.encoder
+                .begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some(&self.label),
+                    timestamp_writes,
+                })
+                .forget_lifetime(),
+        );
+    }
+
+    /// The wgpu pass a dispatch of `kernel` goes into.
+    fn pass_for(&mut self, kernel: &'static str) -> &mut wgpu::ComputePass<'static> {
+        if self.per_dispatch() {
+            self.begin(Some(kernel));
+        }
+        self.pass.as_mut().expect("a pass is open")
     }
 
     /// Dispatches a kernel of one invocation per item over `count` items.
@@ -163,9 +190,9 @@ impl<'r> Pass<'r> {
         params: &P,
         buffers: &[&wgpu::Buffer],
     ) {
-        self.bind(kernel, params, buffers);
         let [x, y, z] = grid.groups;
-        self.pass.dispatch_workgroups(x, y, z);
+        self.bind(kernel, params, buffers)
+            .dispatch_workgroups(x, y, z);
         self.count_dispatch();
     }
 
@@ -179,24 +206,36 @@ impl<'r> Pass<'r> {
         params: &P,
         buffers: &[&wgpu::Buffer],
     ) {
-        self.bind(kernel, params, buffers);
-        self.pass.dispatch_workgroups_indirect(args, offset);
+        self.bind(kernel, params, buffers)
+            .dispatch_workgroups_indirect(args, offset);
         self.count_dispatch();
     }
 
     fn count_dispatch(&mut self) {
-        if let Some(count) = self.dispatches.as_deref_mut() {
+        if let Some(count) = self
+            .timer
+            .as_deref_mut()
+            .and_then(GpuTimer::last_dispatches)
+        {
             *count += 1;
         }
     }
 
-    fn bind<P: Pod>(&mut self, kernel: &Kernel<P>, params: &P, buffers: &[&wgpu::Buffer]) {
+    /// Binds `kernel`, its parameters and buffers in the pass its dispatch goes into; that pass.
+    fn bind<P: Pod>(
+        &mut self,
+        kernel: &Kernel<P>,
+        params: &P,
+        buffers: &[&wgpu::Buffer],
+    ) -> &mut wgpu::ComputePass<'static> {
         let (chunk, offset) = self.params.push(self.ctx, params);
         let mut bound = Vec::with_capacity(buffers.len() + 1);
         bound.push(&chunk);
         bound.extend_from_slice(buffers);
         let group = kernel.bind_group(self.ctx, &bound);
-        self.pass.set_pipeline(&kernel.compiled.pipeline);
-        self.pass.set_bind_group(0, &group, &[offset]);
+        let pass = self.pass_for(kernel.info.name);
+        pass.set_pipeline(&kernel.compiled.pipeline);
+        pass.set_bind_group(0, &group, &[offset]);
+        pass
     }
 }

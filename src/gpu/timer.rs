@@ -1,17 +1,21 @@
 //! GPU stage timing with timestamp queries written at the start and end of compute passes, and
 //! the number of dispatches each timed pass recorded (what a real GPU's fixed per-dispatch cost
 //! multiplies). Where the device has no timestamp support every stage reads "n/a" (`ms == None`).
+//! On a context that profiles dispatches (`GpuOptions::profile_dispatches`), every dispatch gets a
+//! timed pass of its own, labelled with its stage and kernel (`Pass` opens them).
 
 use super::{read_buffer, GpuContext};
 use crate::{Error, Result};
 
 /// One timed stage; `ms` is `None` where timestamps are unavailable. `dispatches`: compute
-/// dispatches the stage recorded (0 for work on the CPU).
+/// dispatches the stage recorded (0 for work on the CPU). `kernel`: the kernel of a dispatch timed
+/// on its own (profiling dispatches), else None.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StageTime {
     pub label: String,
     pub ms: Option<f64>,
     pub dispatches: u32,
+    pub kernel: Option<&'static str>,
 }
 
 impl StageTime {
@@ -21,15 +25,18 @@ impl StageTime {
             label: label.into(),
             ms: Some(ms),
             dispatches: 0,
+            kernel: None,
         }
     }
 }
 
-/// A timed pass of a recording: its label and how many dispatches it holds.
+/// A timed pass of a recording: its label, how many dispatches it holds, and the kernel of a
+/// dispatch timed on its own.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TimedPass {
     pub label: String,
     pub dispatches: u32,
+    pub kernel: Option<&'static str>,
 }
 
 impl std::fmt::Display for StageTime {
@@ -41,15 +48,29 @@ impl std::fmt::Display for StageTime {
     }
 }
 
+/// Timed passes a timer that profiles dispatches holds (two queries each, as many as a query set
+/// holds): more dispatches than any timed recording records.
+const PROFILE_CAPACITY: u32 = wgpu::QUERY_SET_MAX_QUERIES / 2;
+
 /// Collects timestamp pairs for up to `capacity` passes of one submission.
 pub struct GpuTimer {
     queries: Option<(wgpu::QuerySet, wgpu::Buffer)>,
     passes: Vec<TimedPass>,
     capacity: u32,
+    /// Every dispatch gets a timed pass of its own (`ctx.profile_dispatches`).
+    per_dispatch: bool,
 }
 
 impl GpuTimer {
+    /// A timer for up to `capacity` passes (for `PROFILE_CAPACITY` dispatches when the context
+    /// profiles dispatches).
     pub fn new(ctx: &GpuContext, capacity: u32) -> Self {
+        let per_dispatch = ctx.profile_dispatches && ctx.timestamps;
+        let capacity = if per_dispatch {
+            capacity.max(PROFILE_CAPACITY)
+        } else {
+            capacity
+        };
         let queries = ctx.timestamps.then(|| {
             let set = ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("stage timestamps"),
@@ -68,11 +89,22 @@ impl GpuTimer {
             queries,
             passes: Vec::new(),
             capacity,
+            per_dispatch,
         }
     }
 
-    /// Timestamp writes for a new compute pass named `label` (None without timestamp support).
-    pub fn pass(&mut self, label: &str) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
+    /// Whether every dispatch gets a timed pass of its own.
+    pub(crate) fn per_dispatch(&self) -> bool {
+        self.per_dispatch
+    }
+
+    /// Timestamp writes for a new compute pass named `label`, holding one dispatch of `kernel`
+    /// when the timer profiles dispatches (None without timestamp support).
+    pub fn pass(
+        &mut self,
+        label: &str,
+        kernel: Option<&'static str>,
+    ) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
         assert!(
             (self.passes.len() as u32) < self.capacity,
             "GpuTimer capacity {} exceeded",
@@ -82,6 +114,7 @@ impl GpuTimer {
         self.passes.push(TimedPass {
             label: label.to_owned(),
             dispatches: 0,
+            kernel,
         });
         self.queries
             .as_ref()
@@ -125,19 +158,29 @@ impl GpuTimer {
         passes
             .into_iter()
             .enumerate()
-            .map(|(i, TimedPass { label, dispatches })| {
-                let ms = match ticks.get(2 * i..2 * i + 2) {
-                    Some(&[start, end]) if end >= start && period_ns > 0.0 => {
-                        Some((end - start) as f64 * period_ns * 1e-6)
+            .map(
+                |(
+                    i,
+                    TimedPass {
+                        label,
+                        dispatches,
+                        kernel,
+                    },
+                )| {
+                    let ms = match ticks.get(2 * i..2 * i + 2) {
+                        Some(&[start, end]) if end >= start && period_ns > 0.0 => {
+                            Some((end - start) as f64 * period_ns * 1e-6)
+                        }
+                        _ => None,
+                    };
+                    StageTime {
+                        label,
+                        ms,
+                        dispatches,
+                        kernel,
                     }
-                    _ => None,
-                };
-                StageTime {
-                    label,
-                    ms,
-                    dispatches,
-                }
-            })
+                },
+            )
             .collect()
     }
 
@@ -156,8 +199,9 @@ impl GpuTimer {
     }
 }
 
-/// Adds up stages with the same label (e.g. several treelet rounds), times and dispatches, in
-/// order of first appearance; a label is "n/a" if any of its passes is.
+/// Adds up stages with the same label (e.g. several treelet rounds, or the dispatches of a stage
+/// timed one by one), times and dispatches, in order of first appearance; a label is "n/a" if any
+/// of its passes is. The sums name no kernel.
 pub fn aggregate_stages(stages: Vec<StageTime>) -> Vec<StageTime> {
     let mut out: Vec<StageTime> = Vec::new();
     for stage in stages {
@@ -166,7 +210,10 @@ pub fn aggregate_stages(stages: Vec<StageTime>) -> Vec<StageTime> {
                 total.ms = total.ms.zip(stage.ms).map(|(a, b)| a + b);
                 total.dispatches += stage.dispatches;
             }
-            None => out.push(stage),
+            None => out.push(StageTime {
+                kernel: None,
+                ..stage
+            }),
         }
     }
     out
@@ -181,6 +228,7 @@ mod tests {
             label: label.into(),
             ms,
             dispatches,
+            kernel: None,
         }
     }
 

@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# Every dispatch of a build timed on its own on a lent GPU, in one `device` call: `bench
+# --profile-dispatches` per scene for lbvh, trbvh and trbvh-split (each dispatch in a compute pass
+# of its own, so the sums run a little above a normal build's stages).
+# Here, first:   bash ../shared/gpu/pack.sh
+# Then `run` with carry [".gpu", ".gl"] and the command:   bash scripts/gpu-profile.sh
+# JSON lines go to $OUT/profile.jsonl; printed last, per scene and builder: each stage's dispatches
+# by kernel (count, total, min/median/max ms), then the treelet rounds dispatch by dispatch.
+# SCENES, BUILDERS and REPEATS override the defaults; with TREELET set to a treelet binary it runs
+# that one here instead (a dry run on lavapipe:
+# TREELET=target/release/treelet SCENES=field:100 REPEATS=1 bash scripts/gpu-profile.sh).
+set -u
+. scripts/gpu-env.sh
+: > "$out/profile.jsonl"
+for s in ${SCENES:-conference sibenik field:707 field:1000}; do
+  timeout 250 "$bin" bench --scene "$s" --builder "${BUILDERS:-lbvh,trbvh,trbvh-split}" \
+    --profile-dispatches --width 64 --height 64 --spp 1 --repeats "${REPEATS:-11}" \
+    >> "$out/profile.jsonl" 2>> "$out/profile.log" || echo "$s: exit $? (see profile.log)"
+done
+python3 - "$out/profile.jsonl" <<'PY'
+import json, statistics, sys
+rows = [json.loads(l) for l in open(sys.argv[1]) if l.startswith("{")]
+for r in rows:
+    d = r["dispatch_ms"]
+    print(f"\n{r['scene']} {r['builder']}: build {r['build_ms']:.3f} ms (median), "
+          f"{len(d)} dispatches summing to {sum(x['ms'] or 0 for x in d):.3f} ms")
+    groups = {}
+    for x in d:
+        groups.setdefault((x["stage"], x["kernel"]), []).append(x["ms"] or 0)
+    for (stage, kernel), ms in groups.items():
+        print(f"  {stage:16} {kernel:20} {len(ms):3} x  total {sum(ms):8.3f}  "
+              f"min {min(ms):7.3f}  median {statistics.median(ms):7.3f}  max {max(ms):7.3f}")
+    rounds = [x for x in d if x["stage"].startswith("treelets")]
+    if rounds:
+        print("  treelet rounds, in order (ms): " + " ".join(
+            ("|" if x["kernel"] == "nodes_level" else "") + f"{x['ms'] or 0:.3f}" for x in rounds))
+PY
