@@ -1,26 +1,33 @@
 #!/usr/bin/env bash
 # Every dispatch of a build timed on its own on a lent GPU, in one `device` call: `bench
 # --profile-dispatches` per scene for lbvh, trbvh and trbvh-split (each dispatch in a compute pass
-# of its own, so the sums run a little above a normal build's stages).
+# of its own, so the sums run a little above a normal build's stages), with the radix sort's
+# default tiles and with each tile size (`--sort-tile-items`).
 # Here, first:   bash ../shared/gpu/pack.sh
 # Then `run` with carry [".gpu", ".gl"] and the command:   bash scripts/gpu-profile.sh
-# JSON lines go to $OUT/profile.jsonl; printed last, per scene and builder: each stage's dispatches
-# by kernel (count, total, min/median/max ms), then the treelet rounds dispatch by dispatch.
-# SCENES, BUILDERS and REPEATS override the defaults; with TREELET set to a treelet binary it runs
+# JSON lines go to $OUT/profile.jsonl; printed last, per scene and builder with the default tiles:
+# each stage's dispatches by kernel (count, total, min/median/max ms), then the treelet rounds
+# dispatch by dispatch; then build and sort ms per tile size. SCENES, BUILDERS, TILES and REPEATS
+# override the defaults; with TREELET set to a treelet binary it runs
 # that one here instead (a dry run on lavapipe:
 # TREELET=target/release/treelet SCENES=field:100 REPEATS=1 bash scripts/gpu-profile.sh).
 set -u
 . scripts/gpu-env.sh
 : > "$out/profile.jsonl"
 for s in ${SCENES:-conference sibenik field:707 field:1000}; do
-  timeout 250 "$bin" bench --scene "$s" --builder "${BUILDERS:-lbvh,trbvh,trbvh-split}" \
-    --profile-dispatches --width 64 --height 64 --spp 1 --repeats "${REPEATS:-11}" \
-    >> "$out/profile.jsonl" 2>> "$out/profile.log" || echo "$s: exit $? (see profile.log)"
+  for tile in ${TILES:-default 8 16 32}; do
+    opts=""
+    [ "$tile" = default ] || opts="--sort-tile-items $tile"
+    # shellcheck disable=SC2086
+    timeout 250 "$bin" bench --scene "$s" --builder "${BUILDERS:-lbvh,trbvh,trbvh-split}" $opts \
+      --profile-dispatches --width 64 --height 64 --spp 1 --repeats "${REPEATS:-11}" \
+      >> "$out/profile.jsonl" 2>> "$out/profile.log" || echo "$s $tile: exit $? (see profile.log)"
+  done
 done
 python3 - "$out/profile.jsonl" <<'PY'
 import json, statistics, sys
 rows = [json.loads(l) for l in open(sys.argv[1]) if l.startswith("{")]
-for r in rows:
+for r in (r for r in rows if r["sort_tile_items"] is None):
     d = r["dispatch_ms"]
     print(f"\n{r['scene']} {r['builder']}: build {r['build_ms']:.3f} ms (median), "
           f"{len(d)} dispatches summing to {sum(x['ms'] or 0 for x in d):.3f} ms")
@@ -34,4 +41,9 @@ for r in rows:
     if rounds:
         print("  treelet rounds, in order (ms): " + " ".join(
             ("|" if x["kernel"] == "nodes_level" else "") + f"{x['ms'] or 0:.3f}" for x in rounds))
+print("\nscene            builder      tile     build ms   sort ms  sah")
+for r in rows:
+    tile = "default" if r["sort_tile_items"] is None else r["sort_tile_items"]
+    print(f"{r['scene'][-16:]:16} {r['builder']:12} {tile:>7} {r['build_ms']:10.3f}"
+          f" {r['stages_ms'].get('sort') or 0:9.3f}  {r['sah']:.4f}")
 PY

@@ -1,6 +1,6 @@
 // Radix-sort histogram of the first LSD pass of `sort::RadixSort` (reduce-then-scan): each
 // workgroup counts the 4-bit digits at `params.shift` (only the low `params.bits` of them) of its
-// tile of SORT_TILE keys and writes the 16 counts digit-major, counts[digit * num_tiles + tile], from
+// tile of tile_size() keys and writes the 16 counts digit-major, counts[digit * num_tiles + tile], from
 // which keys_scatter.wgsl sums every (digit, tile)'s first output position. Later passes take their
 // counts from the scatter before them, which adds them into `next_counts`: this kernel zeroes the
 // tile's 16 words there for the first scatter.
@@ -31,8 +31,8 @@ fn main(
     }
     let n = sort_count();
     var count = vec4<u32>(0u);
-    for (var i = 0u; i < ITEMS; i++) {
-        let item = tile * SORT_TILE + i * WORKGROUP + lid;
+    for (var i = 0u; i < TILE_ITEMS; i++) {
+        let item = tile * tile_size() + i * WORKGROUP + lid;
         if item < n {
             count += one_hot(digit_of(keys[item]));
         }

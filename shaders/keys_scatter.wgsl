@@ -1,5 +1,5 @@
 // Radix-sort stable scatter, one dispatch per LSD pass of `sort::RadixSort` (reduce-then-scan): each
-// workgroup ranks its tile of SORT_TILE (key, value) pairs stably by the 4-bit digit at `params.shift`
+// workgroup ranks its tile of tile_size() (key, value) pairs stably by the 4-bit digit at `params.shift`
 // (low `params.bits` bits) and writes each pair to offset(digit, tile) + rank. On the way it counts
 // the next pass's digits per tile of its output, so that no pass but the first needs a histogram
 // dispatch.
@@ -13,15 +13,15 @@
 //
 // Stable ranking by per-invocation counting (the radix sort of Zagha & Blelloch 1991 for vector
 // multiprocessors, one "processor" per invocation): invocation i owns the contiguous pairs
-// [i * ITEMS, (i + 1) * ITEMS) of the tile. (1) It counts its digits in 16 byte-wide counters
-// packed in a vec4 (one-hot adds, all vector ALU, no atomics); (2) the 16 x 256 counts, widened to
-// 16-bit halves in workgroup memory, get an exclusive scan over invocations per digit (raking:
-// segments of 8 invocations, then the 32 segment sums; 3 barriers in all); (3) it walks its pairs
-// again and writes each to offset(digit, tile) + prefix(digit, invocation) + the count of that digit
-// earlier in its own run. Ranks follow (invocation, position) = element order, hence stable.
+// [i * TILE_ITEMS, (i + 1) * TILE_ITEMS) of the tile. (1) It counts its digits in 16 byte-wide
+// counters packed in a vec4 (one-hot adds, all vector ALU, no atomics); (2) the 16 x 256 counts,
+// widened to 16-bit halves in workgroup memory, get an exclusive scan over invocations per digit
+// (raking: segments of 8 invocations, then the 32 segment sums; 3 barriers in all); (3) it walks
+// its pairs again and writes each to offset(digit, tile) + prefix(digit, invocation) + the count
+// of that digit earlier in its own run. Ranks follow (invocation, position) = element order, hence stable.
 //
 // The next pass's counts (when `params.next_bits` > 0): the pairs of digit d go to the consecutive
-// slots from offset(d, tile), at most SORT_TILE of them, so into at most two output tiles. The
+// slots from offset(d, tile), at most a tile's worth of them, so into at most two output tiles. The
 // workgroup counts each pair's next digit per (d, which of the two tiles) in workgroup memory, then
 // adds the non-zero counts to `next_counts[next digit * num_tiles + output tile]` (device atomics:
 // at most 512 per workgroup). The buffers rotate over three passes: the scatter reads `counts`,
@@ -113,10 +113,11 @@ fn main(
         cleared_counts[lid * params.num_tiles + tile] = 0u;
     }
     compute_tile_offsets(lid, tile);
-    let first = tile * SORT_TILE + lid * ITEMS;
+    let size = tile_size();
+    let first = tile * size + lid * TILE_ITEMS;
     let n = sort_count();
     var count = vec4<u32>(0u);
-    for (var i = 0u; i < ITEMS; i++) {
+    for (var i = 0u; i < TILE_ITEMS; i++) {
         let item = first + i;
         if item < n {
             count += one_hot(digit_of(keys_in[item]));
@@ -151,7 +152,7 @@ fn main(
     let slots2 = vec4<u32>(first_slot(8u, lid), first_slot(9u, lid), first_slot(10u, lid), first_slot(11u, lid));
     let slots3 = vec4<u32>(first_slot(12u, lid), first_slot(13u, lid), first_slot(14u, lid), first_slot(15u, lid));
     var seen = vec4<u32>(0u);
-    for (var i = 0u; i < ITEMS; i++) {
+    for (var i = 0u; i < TILE_ITEMS; i++) {
         let item = first + i;
         if item < n {
             let key = keys_in[item];
@@ -163,7 +164,7 @@ fn main(
             keys_out[dest] = key;
             values_out[dest] = values_in[item];
             if gather_next {
-                let second_tile = dest / SORT_TILE - tile_offsets[d] / SORT_TILE;
+                let second_tile = dest / size - tile_offsets[d] / size;
                 let next = digit_at(key, params.next_shift, params.next_bits);
                 atomicAdd(&next_digit_counts[(d * 2u + second_tile) * 16u + next], 1u);
             }
@@ -174,7 +175,7 @@ fn main(
         for (var i = lid; i < 512u; i += WORKGROUP) {
             let count = atomicLoad(&next_digit_counts[i]);
             if count != 0u {
-                let output_tile = tile_offsets[i >> 5u] / SORT_TILE + ((i >> 4u) & 1u);
+                let output_tile = tile_offsets[i >> 5u] / size + ((i >> 4u) & 1u);
                 atomicAdd(&next_counts[(i & 15u) * params.num_tiles + output_tile], count);
             }
         }

@@ -202,6 +202,45 @@ fn bench_compares_round_schedules_on_the_same_tree() {
     }
 }
 
+/// `bench --sort-tile-items` sorts in tiles of 2048, 4096 or 8192 keys; every tile builds the
+/// same trees, and other values are refused.
+#[test]
+fn bench_sort_tiles_build_the_same_trees() {
+    let run = |items: &str| {
+        bench_records(&[
+            "--scene",
+            "field-10k",
+            "--builder",
+            "lbvh,trbvh",
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "--spp",
+            "1",
+            "--repeats",
+            "1",
+            "--warmup-ms",
+            "0",
+            "--sort-tile-items",
+            items,
+        ])
+    };
+    let tree = |r: &serde_json::Value| (r["sah"].clone(), r["nodes"].clone(), r["valid"].clone());
+    let largest = run("32");
+    for items in ["8", "16"] {
+        let records = run(items);
+        for (record, reference) in records.iter().zip(&largest) {
+            assert_eq!(record["sort_tile_items"], items.parse::<u64>().unwrap());
+            assert_eq!(tree(record), tree(reference), "{record}");
+        }
+    }
+    let refused = treelet(&["bench", "--scene", "cornell", "--sort-tile-items", "12"]);
+    assert!(!refused.status.success());
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert!(stderr.contains("must be one of [8, 16, 32]"), "{stderr}");
+}
+
 /// `bench --profile-dispatches` times every dispatch on its own: `dispatch_ms` lists them in
 /// order, as many per stage as the stage's dispatch count, each a declared kernel, and the
 /// stage times are their sums.

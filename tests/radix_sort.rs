@@ -5,9 +5,11 @@ mod common;
 
 use common::{gpu, rng};
 use rand::Rng;
-use treelet::gpu::constants::SORT_TILE;
 use treelet::gpu::{ItemCount, ParamSlab, Recorder};
-use treelet::sort::{sort_pairs_cpu, RadixSort};
+use treelet::sort::{sort_pairs_cpu, RadixSort, SORT_TILE_ITEMS};
+
+/// The largest tile: 256 invocations of 32 keys.
+const SORT_TILE: usize = 256 * 32;
 
 fn split(key: u64) -> [u32; 2] {
     [key as u32, (key >> 32) as u32]
@@ -82,20 +84,60 @@ fn lengths_around_tiles_and_blocks() {
 fn two_dimensional_grids() {
     // Capped at 8 workgroups per dimension, 100,000 pairs need 13 tiles (a 7x2 grid, one
     // workgroup idle) and 65,537 pairs 9 tiles (5x2, one idle): the path that more than
-    // 65,535 * SORT_TILE pairs take under a real device limit.
-    let mut sorter = RadixSort::new(gpu()).with_max_workgroups_per_dimension(8);
-    for (n, bits, seed) in [(100_000, 40, 20), (8 * SORT_TILE as usize + 1, 17, 21)] {
-        assert!(n > 8 * SORT_TILE as usize);
+    // 65,535 tiles of pairs take under a real device limit.
+    let mut sorter = RadixSort::new(gpu())
+        .with_max_workgroups_per_dimension(8)
+        .with_tile_items(32)
+        .unwrap();
+    for (n, bits, seed) in [(100_000, 40, 20), (8 * SORT_TILE + 1, 17, 21)] {
+        assert!(n > 8 * SORT_TILE);
         check(&mut sorter, &random_keys(n, bits, seed), bits);
     }
 }
 
+/// Every tile size sorts the same (tiles of 2048, 4096 and 8192 pairs): lengths around tile
+/// boundaries, many tiles, a 2D grid, odd pass counts; the GPU's choice by length is one of them.
+#[test]
+fn every_tile_size() {
+    for items in SORT_TILE_ITEMS {
+        let tile = 256 * items as usize;
+        let mut sorter = RadixSort::new(gpu()).with_tile_items(items).unwrap();
+        for (n, bits, seed) in [
+            (tile - 1, 32, 70),
+            (tile, 20, 71),
+            (tile + 1, 12, 72),
+            (37 * tile + 5, 44, 73),
+        ] {
+            check(
+                &mut sorter,
+                &random_keys(n, bits, seed + u64::from(items)),
+                bits,
+            );
+        }
+        let mut sorter = RadixSort::new(gpu())
+            .with_max_workgroups_per_dimension(4)
+            .with_tile_items(items)
+            .unwrap();
+        check(&mut sorter, &random_keys(9 * tile + 3, 24, 80), 24);
+    }
+    for n in [1000, 331_179, 1_100_000, 8_400_000] {
+        assert!(
+            SORT_TILE_ITEMS.contains(&treelet::sort::tile_items(n, wgpu::DeviceType::DiscreteGpu))
+        );
+    }
+    assert_eq!(
+        treelet::sort::tile_items(331_179, wgpu::DeviceType::Cpu),
+        32
+    );
+    assert!(RadixSort::new(gpu()).with_tile_items(12).is_err());
+}
+
 #[test]
 fn many_tiles_and_an_odd_pass_count() {
-    // 2,200,000 pairs give 269 tiles: each scatter workgroup sums 16 × 269 digit counts for its
-    // offsets, in stripes of 17 and 16 tiles. 12-bit keys: three passes, so also the copy to the
-    // scratch buffers that odd pass counts start with.
-    let mut sorter = RadixSort::new(gpu());
+    // 2,200,000 pairs give 269 tiles of 8192: each scatter workgroup sums 16 × 269 digit counts
+    // for its offsets, in stripes of 17 and 16 tiles. 12-bit keys: three passes, so also the copy
+    // to the scratch buffers that odd pass counts start with.
+    let mut sorter = RadixSort::new(gpu()).with_tile_items(32).unwrap();
     check(&mut sorter, &random_keys(2_200_000, 12, 22), 12);
 }
 

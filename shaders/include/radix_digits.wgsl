@@ -3,9 +3,10 @@
 // the packed per-invocation digit counters. SortParams must match src/sort/radix_sort.rs.
 
 const WORKGROUP: u32 = 256u;
-const ITEMS: u32 = 32u; // keys per invocation, at most 255 (byte-wide counters)
+// Keys per invocation (8, 16 or 32, set per pipeline by `sort::RadixSort`; at most 255, the
+// byte-wide counters): a tile holds WORKGROUP * TILE_ITEMS keys, below 2^16 (16-bit counters).
+override TILE_ITEMS: u32 = 32u;
 #include "constants.wgsl"
-// SORT_TILE = WORKGROUP * ITEMS keys per workgroup, below 2^16 (16-bit counters).
 
 // The pass's digit: `bits` bits from bit `shift`; the next pass's digit, whose counts the pass
 // gathers: `next_bits` (0 after the last pass) bits from `next_shift`.
@@ -19,6 +20,11 @@ struct SortParams {
 }
 
 @group(0) @binding(0) var<uniform> params: SortParams;
+
+// Keys per tile.
+fn tile_size() -> u32 {
+    return WORKGROUP * TILE_ITEMS;
+}
 
 // Pairs to sort: n, or fewer when the count was computed on the GPU (the including kernel
 // declares `count_limit`; see `gpu::ItemCount`). Tiles past them count and move nothing.

@@ -16,6 +16,7 @@ use treelet::bvh::{
     sah_cost, validate, validate_with_references, write_bvh, write_wide_bvh, Builder,
 };
 use treelet::gpu::{aggregate_stages, GpuContext, Spread, Timing, Warmup};
+use treelet::sort::SORT_TILE_ITEMS;
 use treelet::trace::{PathTracer, TraceStats};
 use treelet::Result;
 
@@ -60,6 +61,10 @@ pub struct BenchArgs {
     /// more than the passes of a normal build) and list them in `dispatch_ms`
     #[arg(long)]
     pub(super) profile_dispatches: bool,
+    /// Keys per invocation of the radix sort's tiles, 8, 16 or 32 (tiles of 2048, 4096 or 8192
+    /// keys; default: from the key count on GPUs, 32 on CPU devices). The trees are the same
+    #[arg(long, value_parser = parse_sort_tile_items)]
+    pub(super) sort_tile_items: Option<u32>,
 }
 
 impl BenchArgs {
@@ -117,6 +122,8 @@ struct BenchRecord {
     /// round) and the team threshold in effect.
     level_dispatches: Option<u32>,
     team_below: Option<u32>,
+    /// The radix sort's keys per invocation asked for (null: chosen per sort).
+    sort_tile_items: Option<u32>,
     adapter: String,
     triangles: usize,
     /// Triangle references in the leaves: the triangle count, plus the pieces of split
@@ -164,6 +171,15 @@ struct BenchRecord {
     trace_wall_ms: f64,
     mrays_per_s: Option<f64>,
     mrays_per_s_spread: Option<Spread>,
+}
+
+/// A radix sort tile's keys per invocation: one of `SORT_TILE_ITEMS`.
+fn parse_sort_tile_items(value: &str) -> std::result::Result<u32, String> {
+    value
+        .parse()
+        .ok()
+        .filter(|items| SORT_TILE_ITEMS.contains(items))
+        .ok_or_else(|| format!("must be one of {SORT_TILE_ITEMS:?}"))
 }
 
 /// One dispatch of a build timed on its own: its stage, kernel and GPU time.
@@ -291,6 +307,7 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
             team_below: builder
                 .treelet_settings()
                 .map(|_| schedule.team_below(gpu.info.device_type)),
+            sort_tile_items: gpu.sort_tile_items,
             adapter: gpu.adapter_description(),
             triangles: scene.triangles.len(),
             references: bvh.prim_indices.len(),

@@ -253,16 +253,20 @@ fn parse_update_mode(name: &str) -> std::result::Result<treelet::bvh::UpdateMode
 
 pub fn run(cli: Cli) -> Result<()> {
     let adapter = cli.adapter.clone();
-    let gpu_with = |profile_dispatches| {
+    let gpu_with = |profile_dispatches, sort_tile_items| {
         GpuContext::new(&GpuOptions {
             adapter: adapter.clone(),
             profile_dispatches,
+            sort_tile_items,
         })
     };
-    let gpu = || gpu_with(false);
+    let gpu = || gpu_with(false, None);
     match cli.command.unwrap_or_else(default_command) {
         Command::Render(args) => render::run(&gpu()?, &args),
-        Command::Bench(args) => bench::run(&gpu_with(args.profile_dispatches)?, &args),
+        Command::Bench(args) => bench::run(
+            &gpu_with(args.profile_dispatches, args.sort_tile_items)?,
+            &args,
+        ),
         Command::Scenes => {
             for entry in treelet::scene::SCENES {
                 println!("{:<16} {}", entry.name, entry.description);

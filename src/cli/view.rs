@@ -44,6 +44,7 @@ pub fn run(adapter: Option<String>, args: ViewArgs) -> Result<()> {
         gpu: GpuOptions {
             adapter,
             profile_dispatches: false,
+            sort_tile_items: None,
         },
         window_size: (args.width, args.height),
         screenshot: args.screenshot,

@@ -36,8 +36,6 @@ pub const MAX_GPU_LEAF_SIZE: u32 = 32;
 pub const BOX_EXIT_SLACK: f32 = 1.000_001_9;
 /// Bits per radix-sort digit.
 pub const RADIX_BITS: u32 = 4;
-/// Keys per workgroup (tile) of the radix sort's histogram and scatter kernels.
-pub const SORT_TILE: u32 = 8192;
 /// Elements per workgroup of the prefix scan.
 pub const SCAN_BLOCK: u32 = 4096;
 /// Items per workgroup of a box reduction (`centroids_reduce`, `triangles_bounds`; four per
@@ -63,7 +61,6 @@ pub fn wgsl() -> String {
         u32_const("MAX_LEVEL_DISPATCHES", MAX_LEVEL_DISPATCHES),
         f32_const("BOX_EXIT_SLACK", BOX_EXIT_SLACK),
         u32_const("RADIX_BITS", RADIX_BITS),
-        u32_const("SORT_TILE", SORT_TILE),
         u32_const("SCAN_BLOCK", SCAN_BLOCK),
         u32_const("REDUCE_TILE", REDUCE_TILE),
         f32_const("F32_MAX", f32::MAX),

@@ -6,7 +6,7 @@ use std::sync::Mutex;
 
 use wgpu::util::DeviceExt;
 
-use super::kernel::{compile, CompiledKernel, KernelInfo, Slot};
+use super::kernel::{compile, CompiledKernel, KernelInfo, Overrides, Slot};
 use crate::{Error, Result};
 
 /// How to choose the adapter.
@@ -16,6 +16,9 @@ pub struct GpuOptions {
     pub adapter: Option<String>,
     /// Time every dispatch on its own (`GpuTimer`): a profiling mode for `bench`.
     pub profile_dispatches: bool,
+    /// Keys per invocation of every radix sort's tile (one of `sort::SORT_TILE_ITEMS`), instead of
+    /// `sort::tile_items` of the length and device: for `bench` to compare them.
+    pub sort_tile_items: Option<u32>,
 }
 
 /// An open device with what the rest of the crate needs to know about it.
@@ -28,12 +31,18 @@ pub struct GpuContext {
     pub timestamps: bool,
     /// Timers time every dispatch in a pass of its own (`GpuOptions::profile_dispatches`).
     pub profile_dispatches: bool,
-    /// Kernels by (file, entry point), compiled once per device.
-    kernels: Mutex<HashMap<(&'static str, &'static str), CompiledKernel>>,
+    /// `GpuOptions::sort_tile_items`.
+    pub sort_tile_items: Option<u32>,
+    /// Kernels by (file, entry point, overridden constants with their values' bits), compiled
+    /// once per device.
+    kernels: Mutex<HashMap<KernelKey, CompiledKernel>>,
     /// The `count_limit` of kernels whose item count is known when recording (`ItemCount`):
     /// one u32, u32::MAX.
     pub(crate) no_count_limit: wgpu::Buffer,
 }
+
+/// A compiled kernel's cache key: file, entry point, and the overridden constants.
+type KernelKey = (&'static str, &'static str, Vec<(&'static str, u64)>);
 
 /// Preference order of adapter types: discrete GPUs first, software rasterizers last.
 fn type_rank(t: wgpu::DeviceType) -> u32 {
@@ -84,8 +93,17 @@ impl GpuContext {
             info.driver,
             info.driver_info
         );
+        if let Some(items) = options.sort_tile_items {
+            if !crate::sort::SORT_TILE_ITEMS.contains(&items) {
+                return Err(Error::InvalidArgument(format!(
+                    "sort tile items must be one of {:?}, got {items}",
+                    crate::sort::SORT_TILE_ITEMS
+                )));
+            }
+        }
         Ok(Self {
             profile_dispatches: options.profile_dispatches,
+            sort_tile_items: options.sort_tile_items,
             ..Self::from_device(adapter, device, queue)?
         })
     }
@@ -144,6 +162,7 @@ impl GpuContext {
             queue,
             timestamps,
             profile_dispatches: false,
+            sort_tile_items: None,
             info,
             kernels: Mutex::default(),
         })
@@ -202,11 +221,20 @@ impl GpuContext {
     }
 
     /// The pipeline and bind group layout of a kernel, compiled on first use.
-    pub(crate) fn compiled_kernel(&self, info: &'static KernelInfo) -> CompiledKernel {
+    pub(crate) fn compiled_kernel(
+        &self,
+        info: &'static KernelInfo,
+        overrides: Overrides,
+    ) -> CompiledKernel {
+        let key = (
+            info.name,
+            info.entry,
+            overrides.iter().map(|&(n, v)| (n, v.to_bits())).collect(),
+        );
         let mut kernels = self.kernels.lock().unwrap_or_else(|e| e.into_inner());
         kernels
-            .entry((info.name, info.entry))
-            .or_insert_with(|| compile(self, info))
+            .entry(key)
+            .or_insert_with(|| compile(self, info, overrides))
             .clone()
     }
 

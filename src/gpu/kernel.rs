@@ -108,7 +108,10 @@ pub(crate) struct CompiledKernel {
     pub layout: wgpu::BindGroupLayout,
 }
 
-pub(crate) fn compile(ctx: &GpuContext, info: &KernelInfo) -> CompiledKernel {
+/// Values of a kernel's pipeline-overridable constants (WGSL `override`), by name.
+pub type Overrides = &'static [(&'static str, f64)];
+
+pub(crate) fn compile(ctx: &GpuContext, info: &KernelInfo, overrides: Overrides) -> CompiledKernel {
     let layout = ctx
         .device
         .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -135,7 +138,10 @@ pub(crate) fn compile(ctx: &GpuContext, info: &KernelInfo) -> CompiledKernel {
             layout: Some(&pipeline_layout),
             module: &module,
             entry_point: Some(info.entry),
-            compilation_options: Default::default(),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants: overrides,
+                ..Default::default()
+            },
             cache: None,
         });
     CompiledKernel { pipeline, layout }
@@ -156,9 +162,19 @@ pub struct Kernel<P> {
 impl<P: Pod> Kernel<P> {
     /// The kernel of `decl` on `ctx`'s device (compiled on first use per device).
     pub fn new(ctx: &GpuContext, decl: &'static KernelDecl<P>) -> Self {
+        Self::with_overrides(ctx, decl, &[])
+    }
+
+    /// The kernel of `decl` with its pipeline-overridable constants set (compiled on first use
+    /// per device and values; the driver compiles the values in, as it does constants).
+    pub fn with_overrides(
+        ctx: &GpuContext,
+        decl: &'static KernelDecl<P>,
+        overrides: Overrides,
+    ) -> Self {
         Self {
             info: &decl.info,
-            compiled: ctx.compiled_kernel(&decl.info),
+            compiled: ctx.compiled_kernel(&decl.info, overrides),
             bind_groups: Mutex::default(),
             params: PhantomData,
         }

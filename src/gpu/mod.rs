@@ -25,7 +25,7 @@ pub use buffers::{
 pub use context::{GpuContext, GpuOptions};
 pub use item_count::ItemCount;
 pub(crate) use kernel::kernel;
-pub use kernel::{Grid, Items, Kernel, KernelDecl, KernelInfo, Slot};
+pub use kernel::{Grid, Items, Kernel, KernelDecl, KernelInfo, Overrides, Slot};
 pub use param_slab::ParamSlab;
 pub use readback::Readback;
 pub use recorder::{Pass, Recorder};

@@ -1,4 +1,4 @@
-//! Radix sort's first step (kernel `keys_histogram`): per tile of `SORT_TILE` keys, the 16 counts
+//! Radix sort's first step (kernel `keys_histogram`): per tile of keys, the 16 counts
 //! of the first pass's 4-bit digit, stored digit-major (`counts[digit * tiles + tile]`); it zeroes
 //! the tile's words of the counts the first scatter gathers for the second pass.
 

@@ -6,8 +6,9 @@
 //! operations, 11 KiB of workgroup memory and 256 invocations per workgroup. A sort of P =
 //! ceil(key_bits / 4) passes records P + 1 dispatches, in one compute pass for the whole sort:
 //!
-//! 1. `keys_histogram.wgsl`, once: per tile of [`SORT_TILE`] keys, the 16 counts of the first
-//!    pass's digit, stored digit-major (`counts[digit * tiles + tile]`);
+//! 1. `keys_histogram.wgsl`, once: per tile of keys (a workgroup's 256 invocations times
+//!    `tile_items`, see [`tile_items`]), the 16 counts of the first pass's digit, stored
+//!    digit-major (`counts[digit * tiles + tile]`);
 //! 2. `keys_scatter.wgsl`, once per pass: each tile's first output slot per digit, summed by the
 //!    workgroup from the counts of all tiles (16 × tiles words, which stay in cache: this replaces
 //!    the scan dispatches between histogram and scatter), stable ranking within the tile by
@@ -36,14 +37,36 @@ use bytemuck::{Pod, Zeroable};
 
 use super::keys_histogram::KEYS_HISTOGRAM;
 use super::keys_scatter::KEYS_SCATTER;
-pub use crate::gpu::constants::{RADIX_BITS, SORT_TILE};
+pub use crate::gpu::constants::RADIX_BITS;
 use crate::gpu::{
     read_buffer, storage_buffer, storage_buffer_zeroed, GpuContext, Grid, ItemCount, Kernel,
-    ParamSlab, Recorder,
+    Overrides, ParamSlab, Recorder,
 };
 use crate::{Error, Result};
 
 const RADIX: u32 = 1 << RADIX_BITS;
+/// Invocations per workgroup of the sort's kernels (`radix_digits.wgsl`).
+const SORT_WORKGROUP: u32 = 256;
+/// Keys per invocation a sort may use (`tile_items`): tiles of 2048, 4096 or 8192 keys.
+pub const SORT_TILE_ITEMS: [u32; 3] = [8, 16, 32];
+
+/// Keys per invocation (a tile is 256 times as many keys) for `len` keys on a device of
+/// `device` type. Each scatter workgroup sums 16 counts per tile, so the work of finding the
+/// offsets grows with the square of the tile count; smaller tiles give more workgroups. On a GPU
+/// the smallest tile with at most `GPU_TILES` tiles (conference's 331k keys: tiles of 2048, 162
+/// workgroups instead of 41 for 132 multiprocessors; an estimate, not measured on a GPU yet); on a
+/// CPU device (lavapipe), where every invocation is a SIMD lane of few cores, the largest (tiles
+/// of 2048 cost lavapipe's sort about half again).
+pub fn tile_items(len: u32, device: wgpu::DeviceType) -> u32 {
+    const GPU_TILES: u32 = 256;
+    match device {
+        wgpu::DeviceType::Cpu => SORT_TILE_ITEMS[2],
+        _ => SORT_TILE_ITEMS
+            .into_iter()
+            .find(|&items| len.div_ceil(SORT_WORKGROUP * items) <= GPU_TILES)
+            .unwrap_or(SORT_TILE_ITEMS[2]),
+    }
+}
 
 /// Parameters of one sort pass (keys_histogram.wgsl, keys_scatter.wgsl): its digit, `bits` bits
 /// from bit `shift`, and the next pass's digit (`next_bits` = 0 after the last pass).
@@ -60,13 +83,14 @@ pub struct SortParams {
 const _: () = assert!(std::mem::size_of::<SortParams>() == 24);
 
 impl SortParams {
-    /// Pass `pass` of a sort of `len` pairs in `num_tiles` tiles by the low `key_bits` bits.
-    fn pass(len: u32, num_tiles: u32, key_bits: u32, pass: u32) -> Self {
+    /// Pass `pass` of a sort of `len` pairs by the low `key_bits` bits, in tiles of 256 ×
+    /// `tile_items` pairs.
+    fn pass(len: u32, tile_items: u32, key_bits: u32, pass: u32) -> Self {
         let shift = pass * RADIX_BITS;
         let next_shift = shift + RADIX_BITS;
         Self {
             n: len,
-            num_tiles,
+            num_tiles: len.div_ceil(SORT_WORKGROUP * tile_items),
             shift,
             bits: RADIX_BITS.min(key_bits - shift),
             next_shift,
@@ -104,34 +128,73 @@ impl Scratch {
         })
     }
 
+    /// Digit counts for the most tiles: those of the smallest tile.
     fn counts(ctx: &GpuContext, capacity: u32) -> Result<wgpu::Buffer> {
-        storage_buffer_zeroed(
-            ctx,
-            "sort digit counts",
-            u64::from(capacity.div_ceil(SORT_TILE) * RADIX) * 4,
-        )
+        let tiles = capacity.div_ceil(SORT_WORKGROUP * SORT_TILE_ITEMS[0]);
+        storage_buffer_zeroed(ctx, "sort digit counts", u64::from(tiles * RADIX) * 4)
     }
 }
 
-/// The GPU radix sort: kernels created once per device, scratch buffers grown on demand.
-pub struct RadixSort {
+/// The kernels of one tile size (`SORT_TILE_ITEMS`, the WGSL override `TILE_ITEMS`).
+struct TileKernels {
     histogram: Kernel<SortParams>,
     scatter: Kernel<SortParams>,
+}
+
+impl TileKernels {
+    /// The kernels of tile size `SORT_TILE_ITEMS[variant]`.
+    fn new(ctx: &GpuContext, variant: usize) -> Self {
+        Self {
+            histogram: Kernel::with_overrides(ctx, &KEYS_HISTOGRAM, TILE_OVERRIDES[variant]),
+            scatter: Kernel::with_overrides(ctx, &KEYS_SCATTER, TILE_OVERRIDES[variant]),
+        }
+    }
+}
+
+/// The override values of each tile size, in the order of `SORT_TILE_ITEMS`.
+const TILE_OVERRIDES: [Overrides; 3] = [
+    &[("TILE_ITEMS", 8.0)],
+    &[("TILE_ITEMS", 16.0)],
+    &[("TILE_ITEMS", 32.0)],
+];
+
+/// The GPU radix sort: kernels created per tile size when first used, scratch buffers grown on
+/// demand.
+pub struct RadixSort {
+    kernels: [Option<TileKernels>; 3],
     scratch: Option<Scratch>,
     max_workgroups_per_dimension: u32,
+    /// Keys per invocation of every sort (one of `SORT_TILE_ITEMS`); None: the context's
+    /// `sort_tile_items`, else `tile_items` of the length and device.
+    fixed_tile_items: Option<u32>,
     /// Parameters of the sorts `sort_pairs` records and submits itself.
     params: ParamSlab,
 }
 
 impl RadixSort {
     pub fn new(ctx: &GpuContext) -> Self {
+        // The largest tile, which every CPU device and the largest inputs use, compiled up front.
+        let mut kernels = [None, None, None];
+        kernels[2] = Some(TileKernels::new(ctx, 2));
         Self {
-            histogram: Kernel::new(ctx, &KEYS_HISTOGRAM),
-            scatter: Kernel::new(ctx, &KEYS_SCATTER),
+            kernels,
             scratch: None,
             max_workgroups_per_dimension: u32::MAX,
+            fixed_tile_items: None,
             params: ParamSlab::new(ctx),
         }
+    }
+
+    /// Sorts in tiles of 256 × `items` keys (one of `SORT_TILE_ITEMS`) whatever the length and
+    /// device (tests; the result is the same for every tile).
+    pub fn with_tile_items(mut self, items: u32) -> Result<Self> {
+        if !SORT_TILE_ITEMS.contains(&items) {
+            return Err(Error::InvalidArgument(format!(
+                "sort tile items must be one of {SORT_TILE_ITEMS:?}, got {items}"
+            )));
+        }
+        self.fixed_tile_items = Some(items);
+        Ok(self)
     }
 
     /// Caps the workgroups per grid dimension below the device limit (at least 1), so that small
@@ -188,7 +251,16 @@ impl RadixSort {
         }
         let scratch = self.scratch.as_ref().expect("scratch allocated above");
         let passes = pass_count(key_bits);
-        let num_tiles = len.div_ceil(SORT_TILE);
+        let items = self
+            .fixed_tile_items
+            .or(ctx.sort_tile_items)
+            .unwrap_or_else(|| tile_items(len, ctx.info.device_type));
+        let variant = SORT_TILE_ITEMS
+            .iter()
+            .position(|&i| i == items)
+            .expect("a tile size of SORT_TILE_ITEMS");
+        let kernels = &*self.kernels[variant].get_or_insert_with(|| TileKernels::new(ctx, variant));
+        let num_tiles = len.div_ceil(SORT_WORKGROUP * items);
         let max = self
             .max_workgroups_per_dimension
             .min(ctx.device.limits().max_compute_workgroups_per_dimension);
@@ -206,17 +278,17 @@ impl RadixSort {
         let mut pass = rec.pass("sort");
         let counts = &scratch.counts;
         pass.dispatch(
-            &self.histogram,
+            &kernels.histogram,
             tile_grid,
-            &SortParams::pass(len, num_tiles, key_bits, 0),
+            &SortParams::pass(len, items, key_bits, 0),
             &[src.0, &counts[0], &counts[1], limit],
         );
         for p in 0..passes {
             let rotation = p as usize;
             pass.dispatch(
-                &self.scatter,
+                &kernels.scatter,
                 tile_grid,
-                &SortParams::pass(len, num_tiles, key_bits, p),
+                &SortParams::pass(len, items, key_bits, p),
                 &[
                     src.0,
                     src.1,
