@@ -40,11 +40,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
     var r = RangeNode(0u, 0u, 0u, 0u, 0u, false);
     var is_climbing = false;
     if j < leaf_count {
-        r = leaf_range_node(j);
-        let b = prim_boxes[prim_indices[j]];
-        store_box(r.node, b.min, b.max);
-        atomicStore(&node_words[r.node * 8u + 3u], j);
-        atomicStore(&node_words[r.node * 8u + 7u], LEAF_FLAG | 1u);
+        r = emit_leaf(j, prim_boxes[prim_indices[j]]);
         is_climbing = r.node != 0u;
         if is_climbing {
             atomicAdd(&climbing, 1u);
@@ -65,14 +61,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
         // Acquire: the sibling's data, stored before its arrival, is visible now.
         storageBarrier();
         if is_climbing {
-            let split = parent_split(r);
-            r = parent_range_node(r, sibling);
-            let children = range_children(r, split);
-            store_box(r.node, min(load_min(children.x), load_min(children.y)), max(load_max(children.x), load_max(children.y)));
-            atomicStore(&node_words[r.node * 8u + 3u], children.x);
-            atomicStore(&node_words[r.node * 8u + 7u], children.y);
-            parents[children.x] = r.node;
-            parents[children.y] = r.node;
+            r = emit_parent(r, sibling).range;
             if r.node == 0u {
                 is_climbing = false;
                 atomicSub(&climbing, 1u);

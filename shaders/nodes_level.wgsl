@@ -109,12 +109,9 @@ fn main(
             }
         }
     } else if j < n {
-        r = leaf_range_node(j);
-        let node = r.node;
         let b = prim_boxes[order[j]];
-        store_box(node, b.min, b.max);
-        atomicStore(&node_words[node * 8u + 3u], j);
-        atomicStore(&node_words[node * 8u + 7u], LEAF_FLAG | 1u);
+        r = emit_leaf(j, b);
+        let node = r.node;
         atomicStore(&prim_counts[node], 1u);
         atomicStore(&costs[node], bitcast<u32>(params.ct * surface_area(b.min, b.max, params.zero)));
         atomicStore(&levels[node], 0u);
@@ -138,19 +135,13 @@ fn main(
         // Acquire: the sibling's data, stored before its arrival, is visible now.
         storageBarrier();
         if is_climbing {
-            let split = parent_split(r);
-            r = parent_range_node(r, sibling);
+            let parent = emit_parent(r, sibling);
+            r = parent.range;
             let node = r.node;
-            let pair = range_children(r, split);
-            let left = pair.x;
-            let right = pair.y;
-            atomicStore(&node_words[node * 8u + 3u], left);
-            atomicStore(&node_words[node * 8u + 7u], right);
-            parents[left] = node;
-            parents[right] = node;
-            let lo = min(load_min(left), load_min(right));
-            let hi = max(load_max(left), load_max(right));
-            store_box(node, lo, hi);
+            let left = parent.children.x;
+            let right = parent.children.y;
+            let lo = parent.lo;
+            let hi = parent.hi;
             let prims = atomicLoad(&prim_counts[left]) + atomicLoad(&prim_counts[right]);
             let children = bitcast<f32>(atomicLoad(&costs[left])) + bitcast<f32>(atomicLoad(&costs[right]));
             atomicStore(&prim_counts[node], prims);

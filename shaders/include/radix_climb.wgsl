@@ -16,9 +16,11 @@
 // keeps) in its parent split's word of `arrivals` with an atomicExchange of far end + 1. The first
 // to arrive stops; the second reads its sibling's far end, zeroes the word (arrivals are zero
 // again after a climb), and finishes the parent. A node carries the δ at both its ends, so each
-// step loads the keys at one split only (the sibling's far end). The including kernel declares `keys:
-// array<vec2<u32>>` (the sorted keys, low word first) and `arrivals: array<atomic<u32>>`, and sets
-// `leaf_count` before the climb.
+// step loads the keys at one split only (the sibling's far end). `emit_leaf` and `emit_parent`
+// write the nodes: children, parent links and boxes (the kernels add what else they compute). The
+// including kernel declares `keys: array<vec2<u32>>` (the sorted keys, low word first),
+// `arrivals: array<atomic<u32>>` and `parents: array<u32>`, includes node_words.wgsl before this
+// file, and sets `leaf_count` before the climb.
 
 var<private> leaf_count: u32;
 
@@ -110,4 +112,37 @@ fn range_children(p: RangeNode, split: u32) -> vec2<u32> {
     let left = select(split, leaf_base + split, p.first == split);
     let right = select(split + 1u, leaf_base + split + 1u, p.last == split + 1u);
     return vec2<u32>(left, right);
+}
+
+// Stores leaf j's node (box `b`, one primitive: sorted leaf j) and returns it for the climb.
+fn emit_leaf(j: u32, b: Aabb) -> RangeNode {
+    let r = leaf_range_node(j);
+    store_box(r.node, b.min, b.max);
+    atomicStore(&node_words[r.node * 8u + 3u], j);
+    atomicStore(&node_words[r.node * 8u + 7u], LEAF_FLAG | 1u);
+    return r;
+}
+
+// A parent the second arrival finished: its range node, its children and its box.
+struct EmittedParent {
+    range: RangeNode,
+    children: vec2<u32>,
+    lo: vec3<f32>,
+    hi: vec3<f32>,
+}
+
+// The second arrival at `r`'s parent (the sibling announced `sibling`): stores the parent's
+// children, their parent links and its box, the union of theirs.
+fn emit_parent(r: RangeNode, sibling: u32) -> EmittedParent {
+    let split = parent_split(r);
+    let p = parent_range_node(r, sibling);
+    let c = range_children(p, split);
+    atomicStore(&node_words[p.node * 8u + 3u], c.x);
+    atomicStore(&node_words[p.node * 8u + 7u], c.y);
+    parents[c.x] = p.node;
+    parents[c.y] = p.node;
+    let lo = min(load_min(c.x), load_min(c.y));
+    let hi = max(load_max(c.x), load_max(c.y));
+    store_box(p.node, lo, hi);
+    return EmittedParent(p, c, lo, hi);
 }
