@@ -81,6 +81,29 @@ fn bench_records(args: &[&str]) -> Vec<serde_json::Value> {
         .collect()
 }
 
+/// `bench` on field-10k with `builders`, one build and one 8 × 8 trace of 1 spp without warm-up,
+/// and the `extra` options: its JSON lines.
+fn quick_bench(builders: &str, extra: &[&str]) -> Vec<serde_json::Value> {
+    let mut args = vec![
+        "--scene",
+        "field-10k",
+        "--builder",
+        builders,
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--spp",
+        "1",
+        "--repeats",
+        "1",
+        "--warmup-ms",
+        "0",
+    ];
+    args.extend_from_slice(extra);
+    bench_records(&args)
+}
+
 /// `bench` prints one JSON line per builder, GPU builders first, each with the min/median/max of
 /// its timed builds and traces and the warm-up it had.
 #[test]
@@ -156,26 +179,10 @@ fn bench_prints_json_lines() {
 /// and reports each schedule; every schedule builds the same tree.
 #[test]
 fn bench_compares_round_schedules_on_the_same_tree() {
-    let records = bench_records(&[
-        "--scene",
-        "field-10k",
-        "--builder",
+    let records = quick_bench(
         "lbvh,trbvh",
-        "--width",
-        "8",
-        "--height",
-        "8",
-        "--spp",
-        "1",
-        "--repeats",
-        "1",
-        "--warmup-ms",
-        "0",
-        "--level-dispatches",
-        "0,3",
-        "--team-below",
-        "0,4096",
-    ]);
+        &["--level-dispatches", "0,3", "--team-below", "0,4096"],
+    );
     let schedule = |r: &serde_json::Value| {
         (
             r["builder"].as_str().unwrap().to_owned(),
@@ -206,26 +213,7 @@ fn bench_compares_round_schedules_on_the_same_tree() {
 /// same trees, and other values are refused.
 #[test]
 fn bench_sort_tiles_build_the_same_trees() {
-    let run = |items: &str| {
-        bench_records(&[
-            "--scene",
-            "field-10k",
-            "--builder",
-            "lbvh,trbvh",
-            "--width",
-            "8",
-            "--height",
-            "8",
-            "--spp",
-            "1",
-            "--repeats",
-            "1",
-            "--warmup-ms",
-            "0",
-            "--sort-tile-items",
-            items,
-        ])
-    };
+    let run = |items: &str| quick_bench("lbvh,trbvh", &["--sort-tile-items", items]);
     let tree = |r: &serde_json::Value| (r["sah"].clone(), r["nodes"].clone(), r["valid"].clone());
     let largest = run("32");
     for items in ["8", "16"] {
@@ -246,23 +234,7 @@ fn bench_sort_tiles_build_the_same_trees() {
 /// stage times are their sums.
 #[test]
 fn bench_profiles_every_dispatch() {
-    let records = bench_records(&[
-        "--scene",
-        "field-10k",
-        "--builder",
-        "lbvh,trbvh,trbvh-split",
-        "--width",
-        "8",
-        "--height",
-        "8",
-        "--spp",
-        "1",
-        "--repeats",
-        "1",
-        "--warmup-ms",
-        "0",
-        "--profile-dispatches",
-    ]);
+    let records = quick_bench("lbvh,trbvh,trbvh-split", &["--profile-dispatches"]);
     let declared: Vec<&str> = treelet::kernels::ALL.iter().map(|k| k.name).collect();
     for record in &records {
         assert_eq!(record["valid"], true);
@@ -436,29 +408,9 @@ fn exported_trees_read_back_as_valid_trees() {
     let dir = temp_path("export", "d");
     std::fs::create_dir_all(&dir).unwrap();
     let file = dir.join("tree.bvh");
-    let out = treelet(&[
-        "bench",
-        "--scene",
-        "field-10k",
-        "--builder",
+    quick_bench(
         "sweep,trbvh-split",
-        "--width",
-        "8",
-        "--height",
-        "8",
-        "--spp",
-        "1",
-        "--repeats",
-        "1",
-        "--warmup-ms",
-        "0",
-        "--export-bvh",
-        file.to_str().unwrap(),
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+        &["--export-bvh", file.to_str().unwrap()],
     );
     let scene = treelet::scene::load_scene("field-10k").unwrap();
     let mut files: Vec<_> = std::fs::read_dir(&dir)
