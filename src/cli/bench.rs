@@ -16,7 +16,7 @@ use treelet::bvh::{
     sah_cost, validate, validate_with_references, write_bvh, write_wide_bvh, Builder,
 };
 use treelet::gpu::{aggregate_stages, GpuContext, Spread, Timing, Warmup};
-use treelet::sort::SORT_TILE_ITEMS;
+use treelet::sort::check_tile_items;
 use treelet::trace::{PathTracer, TraceStats};
 use treelet::Result;
 
@@ -175,11 +175,8 @@ struct BenchRecord {
 
 /// A radix sort tile's keys per invocation: one of `SORT_TILE_ITEMS`.
 fn parse_sort_tile_items(value: &str) -> std::result::Result<u32, String> {
-    value
-        .parse()
-        .ok()
-        .filter(|items| SORT_TILE_ITEMS.contains(items))
-        .ok_or_else(|| format!("must be one of {SORT_TILE_ITEMS:?}"))
+    let items = value.parse().map_err(|e| format!("{e}"))?;
+    check_tile_items(items).map_err(|e| e.to_string())
 }
 
 /// One dispatch of a build timed on its own: its stage, kernel and GPU time.

@@ -94,12 +94,7 @@ impl GpuContext {
             info.driver_info
         );
         if let Some(items) = options.sort_tile_items {
-            if !crate::sort::SORT_TILE_ITEMS.contains(&items) {
-                return Err(Error::InvalidArgument(format!(
-                    "sort tile items must be one of {:?}, got {items}",
-                    crate::sort::SORT_TILE_ITEMS
-                )));
-            }
+            crate::sort::check_tile_items(items)?;
         }
         Ok(Self {
             profile_dispatches: options.profile_dispatches,

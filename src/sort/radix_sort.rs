@@ -57,6 +57,17 @@ pub const SORT_TILE_ITEMS: [u32; 3] = [8, 16, 32];
 /// workgroups instead of 41 for 132 multiprocessors; an estimate, not measured on a GPU yet); on a
 /// CPU device (lavapipe), where every invocation is a SIMD lane of few cores, the largest (tiles
 /// of 2048 cost lavapipe's sort about half again).
+/// `items` if it is one of `SORT_TILE_ITEMS`, else a clear error.
+pub fn check_tile_items(items: u32) -> Result<u32> {
+    if SORT_TILE_ITEMS.contains(&items) {
+        Ok(items)
+    } else {
+        Err(Error::InvalidArgument(format!(
+            "sort tile items must be one of {SORT_TILE_ITEMS:?}, got {items}"
+        )))
+    }
+}
+
 pub fn tile_items(len: u32, device: wgpu::DeviceType) -> u32 {
     const GPU_TILES: u32 = 256;
     match device {
@@ -83,14 +94,13 @@ pub struct SortParams {
 const _: () = assert!(std::mem::size_of::<SortParams>() == 24);
 
 impl SortParams {
-    /// Pass `pass` of a sort of `len` pairs by the low `key_bits` bits, in tiles of 256 ×
-    /// `tile_items` pairs.
-    fn pass(len: u32, tile_items: u32, key_bits: u32, pass: u32) -> Self {
+    /// Pass `pass` of a sort of `len` pairs in `num_tiles` tiles by the low `key_bits` bits.
+    fn pass(len: u32, num_tiles: u32, key_bits: u32, pass: u32) -> Self {
         let shift = pass * RADIX_BITS;
         let next_shift = shift + RADIX_BITS;
         Self {
             n: len,
-            num_tiles: len.div_ceil(SORT_WORKGROUP * tile_items),
+            num_tiles,
             shift,
             bits: RADIX_BITS.min(key_bits - shift),
             next_shift,
@@ -188,12 +198,7 @@ impl RadixSort {
     /// Sorts in tiles of 256 × `items` keys (one of `SORT_TILE_ITEMS`) whatever the length and
     /// device (tests; the result is the same for every tile).
     pub fn with_tile_items(mut self, items: u32) -> Result<Self> {
-        if !SORT_TILE_ITEMS.contains(&items) {
-            return Err(Error::InvalidArgument(format!(
-                "sort tile items must be one of {SORT_TILE_ITEMS:?}, got {items}"
-            )));
-        }
-        self.fixed_tile_items = Some(items);
+        self.fixed_tile_items = Some(check_tile_items(items)?);
         Ok(self)
     }
 
@@ -280,7 +285,7 @@ impl RadixSort {
         pass.dispatch(
             &kernels.histogram,
             tile_grid,
-            &SortParams::pass(len, items, key_bits, 0),
+            &SortParams::pass(len, num_tiles, key_bits, 0),
             &[src.0, &counts[0], &counts[1], limit],
         );
         for p in 0..passes {
@@ -288,7 +293,7 @@ impl RadixSort {
             pass.dispatch(
                 &kernels.scatter,
                 tile_grid,
-                &SortParams::pass(len, items, key_bits, p),
+                &SortParams::pass(len, num_tiles, key_bits, p),
                 &[
                     src.0,
                     src.1,
