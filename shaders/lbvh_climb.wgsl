@@ -1,10 +1,9 @@
 // LBVH stages 4-5 in one bottom-up climb: the hierarchy (Karras 2012's binary radix tree and node
 // layout, found bottom-up as in Apetrei 2014: radix_climb.wgsl) and the bounds (Karras 2012 §4).
 // One invocation per leaf writes its leaf node and climbs; the second arrival at each parent
-// writes the parent's children, their parent links and the parent's box. Internal nodes are
-// 0..n-2 (root 0), leaf j is node n-1+j. Node data is shared across workgroups, so it goes
-// through atomics (node_words.wgsl), ordered around the arrivals by storageBarriers (release
-// before, acquire after, as in bottom_up_climb.wgsl). Arrivals must be zero, and are again after.
+// writes the parent's children, their parent links and the parent's box (radix_climb.wgsl's
+// `climb`, which also orders the node data around the arrivals). Internal nodes are 0..n-2 (root
+// 0), leaf j is node n-1+j. Arrivals must be zero, and are again after.
 #include "bvh_node.wgsl"
 #include "aabb.wgsl"
 #include "items.wgsl"
@@ -26,53 +25,16 @@ const WORKGROUP: u32 = 64u;
 #include "node_words.wgsl"
 #include "radix_climb.wgsl"
 
-var<workgroup> climbing: atomic<u32>;
-var<workgroup> any_climbing: u32;
+// Nothing beyond the children, parent links and box that emit_parent stores.
+fn finish_parent(p: EmittedParent) {}
 
 @compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let j = gid.x + gid.y * params.row_pitch;
     leaf_count = min(params.count, count_limit[0]);
-    if lid == 0u {
-        atomicStore(&climbing, 0u);
-    }
-    workgroupBarrier();
-    var r = RangeNode(0u, 0u, 0u, 0u, 0u, false);
-    var is_climbing = false;
+    var leaf = RangeNode(0u, 0u, 0u, 0u, 0u, false);
     if j < leaf_count {
-        r = emit_leaf(j, prim_boxes[prim_indices[j]]);
-        is_climbing = r.node != 0u;
-        if is_climbing {
-            atomicAdd(&climbing, 1u);
-        }
+        leaf = emit_leaf(j, prim_boxes[prim_indices[j]]);
     }
-    loop {
-        // Release: this node's data is stored before the arrival.
-        storageBarrier();
-        var sibling = 0u;
-        if is_climbing {
-            sibling = arrive(r);
-            if sibling == 0u {
-                // First arrival: the sibling's invocation will finish the parent.
-                is_climbing = false;
-                atomicSub(&climbing, 1u);
-            }
-        }
-        // Acquire: the sibling's data, stored before its arrival, is visible now.
-        storageBarrier();
-        if is_climbing {
-            r = emit_parent(r, sibling).range;
-            if r.node == 0u {
-                is_climbing = false;
-                atomicSub(&climbing, 1u);
-            }
-        }
-        workgroupBarrier();
-        if lid == 0u {
-            any_climbing = atomicLoad(&climbing);
-        }
-        if workgroupUniformLoad(&any_climbing) == 0u {
-            break;
-        }
-    }
+    climb(leaf, j < leaf_count, lid);
 }

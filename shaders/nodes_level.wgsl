@@ -21,7 +21,8 @@
 // the roots, without a climb, and zeroes the node's arrival counter for treelets_climb.wgsl (the
 // first round's climb leaves every arrival word zero).
 // The node data this climb writes is shared across workgroups, so it all goes through atomics
-// (node words, node_words.wgsl), ordered around the arrivals by storageBarriers.
+// (node words, node_words.wgsl), ordered around the arrivals by radix_climb.wgsl's `climb`, which
+// calls `finish_parent` below for each parent.
 #include "bvh_node.wgsl"
 #include "aabb.wgsl"
 #include "treelet_round.wgsl"
@@ -52,8 +53,6 @@ const MAX_WORKGROUPS_X: u32 = 65535u;
 #include "node_words.wgsl"
 #include "radix_climb.wgsl"
 
-var<workgroup> climbing: atomic<u32>;
-var<workgroup> any_climbing: u32;
 var<workgroup> is_last: u32;
 
 fn is_root(node: u32) -> bool {
@@ -85,6 +84,24 @@ fn write_dispatch_args() {
     }
 }
 
+// The first round's climb: a parent's count, cost and level from its children (emit_parent
+// stored its children, links and box), and its bucket if it roots a treelet.
+fn finish_parent(p: EmittedParent) {
+    let node = p.range.node;
+    let left = p.children.x;
+    let right = p.children.y;
+    let prims = atomicLoad(&prim_counts[left]) + atomicLoad(&prim_counts[right]);
+    let children = bitcast<f32>(atomicLoad(&costs[left])) + bitcast<f32>(atomicLoad(&costs[right]));
+    atomicStore(&prim_counts[node], prims);
+    atomicStore(&costs[node], bitcast<u32>(combine_cost(surface_area(p.lo, p.hi, params.zero), prims, children)));
+    var level = 0u;
+    if is_root(node) {
+        level = max(child_level(left), child_level(right)) + 1u;
+        bucket(node, level);
+    }
+    atomicStore(&levels[node], level);
+}
+
 @compute @workgroup_size(WORKGROUP)
 fn main(
     @builtin(global_invocation_id) gid: vec3<u32>,
@@ -94,12 +111,8 @@ fn main(
     let j = gid.x + gid.y * params.row_pitch;
     let n = min(params.count, count_limit[0]);
     leaf_count = n;
-    if lid == 0u {
-        atomicStore(&climbing, 0u);
-    }
-    workgroupBarrier();
-    var r = RangeNode(0u, 0u, 0u, 0u, 0u, false);
-    var is_climbing = false;
+    var leaf = RangeNode(0u, 0u, 0u, 0u, 0u, false);
+    let has_leaf = params.levels_only == 0u && j < n;
     if params.levels_only != 0u {
         // Invocation j: internal node j, whose level the round before computed; no climb.
         if j + 1u < n {
@@ -108,63 +121,14 @@ fn main(
                 bucket(j, atomicLoad(&levels[j]));
             }
         }
-    } else if j < n {
+    } else if has_leaf {
         let b = prim_boxes[order[j]];
-        r = emit_leaf(j, b);
-        let node = r.node;
-        atomicStore(&prim_counts[node], 1u);
-        atomicStore(&costs[node], bitcast<u32>(params.ct * surface_area(b.min, b.max, params.zero)));
-        atomicStore(&levels[node], 0u);
-        is_climbing = node != 0u;
-        if is_climbing {
-            atomicAdd(&climbing, 1u);
-        }
+        leaf = emit_leaf(j, b);
+        atomicStore(&prim_counts[leaf.node], 1u);
+        atomicStore(&costs[leaf.node], bitcast<u32>(params.ct * surface_area(b.min, b.max, params.zero)));
+        atomicStore(&levels[leaf.node], 0u);
     }
-    loop {
-        // Release: this node's box, count, cost and level are stored before the arrival.
-        storageBarrier();
-        var sibling = 0u;
-        if is_climbing {
-            sibling = arrive(r);
-            if sibling == 0u {
-                // First arrival: the sibling's invocation will finish the parent.
-                is_climbing = false;
-                atomicSub(&climbing, 1u);
-            }
-        }
-        // Acquire: the sibling's data, stored before its arrival, is visible now.
-        storageBarrier();
-        if is_climbing {
-            let parent = emit_parent(r, sibling);
-            r = parent.range;
-            let node = r.node;
-            let left = parent.children.x;
-            let right = parent.children.y;
-            let lo = parent.lo;
-            let hi = parent.hi;
-            let prims = atomicLoad(&prim_counts[left]) + atomicLoad(&prim_counts[right]);
-            let children = bitcast<f32>(atomicLoad(&costs[left])) + bitcast<f32>(atomicLoad(&costs[right]));
-            atomicStore(&prim_counts[node], prims);
-            atomicStore(&costs[node], bitcast<u32>(combine_cost(surface_area(lo, hi, params.zero), prims, children)));
-            var level = 0u;
-            if is_root(node) {
-                level = max(child_level(left), child_level(right)) + 1u;
-                bucket(node, level);
-            }
-            atomicStore(&levels[node], level);
-            if node == 0u {
-                is_climbing = false;
-                atomicSub(&climbing, 1u);
-            }
-        }
-        workgroupBarrier();
-        if lid == 0u {
-            any_climbing = atomicLoad(&climbing);
-        }
-        if workgroupUniformLoad(&any_climbing) == 0u {
-            break;
-        }
-    }
+    climb(leaf, has_leaf, lid);
     // Release: the workgroup's roots are counted before the ticket is taken.
     storageBarrier();
     if lid == 0u {

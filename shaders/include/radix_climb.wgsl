@@ -17,10 +17,13 @@
 // to arrive stops; the second reads its sibling's far end, zeroes the word (arrivals are zero
 // again after a climb), and finishes the parent. A node carries the δ at both its ends, so each
 // step loads the keys at one split only (the sibling's far end). `emit_leaf` and `emit_parent`
-// write the nodes: children, parent links and boxes (the kernels add what else they compute). The
-// including kernel declares `keys: array<vec2<u32>>` (the sorted keys, low word first),
-// `arrivals: array<atomic<u32>>` and `parents: array<u32>`, includes node_words.wgsl before this
-// file, and sets `leaf_count` before the climb.
+// write the nodes: children, parent links and boxes; `climb` runs the loop. Node data is shared
+// across workgroups, so it goes through atomics (node_words.wgsl), and storageBarriers order it
+// around the arrivals (release before, acquire after). The including kernel declares `keys:
+// array<vec2<u32>>` (the sorted keys, low word first), `arrivals: array<atomic<u32>>` and
+// `parents: array<u32>`, includes node_words.wgsl before this file, defines
+// `finish_parent(p: EmittedParent)` (what else it computes per parent, from its children), and
+// sets `leaf_count` before the climb.
 
 var<private> leaf_count: u32;
 
@@ -145,4 +148,54 @@ fn emit_parent(r: RangeNode, sibling: u32) -> EmittedParent {
     let hi = max(load_max(c.x), load_max(c.y));
     store_box(p.node, lo, hi);
     return EmittedParent(p, c, lo, hi);
+}
+
+var<workgroup> climbing: atomic<u32>;
+var<workgroup> any_climbing: u32;
+
+// Climbs from `leaf` (emit_leaf's, with the kernel's own data of it stored) when `has_leaf`: at
+// each parent the second arrival emits it (emit_parent), lets the kernel finish it
+// (`finish_parent`) and goes on, up to the root. Barriers need uniform control flow, so every
+// invocation of the workgroup calls this and steps the loop until all are done.
+fn climb(leaf: RangeNode, has_leaf: bool, lid: u32) {
+    if lid == 0u {
+        atomicStore(&climbing, 0u);
+    }
+    workgroupBarrier();
+    var r = leaf;
+    var is_climbing = has_leaf && r.node != 0u;
+    if is_climbing {
+        atomicAdd(&climbing, 1u);
+    }
+    loop {
+        // Release: this node's data is stored before the arrival.
+        storageBarrier();
+        var sibling = 0u;
+        if is_climbing {
+            sibling = arrive(r);
+            if sibling == 0u {
+                // First arrival: the sibling's invocation will finish the parent.
+                is_climbing = false;
+                atomicSub(&climbing, 1u);
+            }
+        }
+        // Acquire: the sibling's data, stored before its arrival, is visible now.
+        storageBarrier();
+        if is_climbing {
+            let parent = emit_parent(r, sibling);
+            finish_parent(parent);
+            r = parent.range;
+            if r.node == 0u {
+                is_climbing = false;
+                atomicSub(&climbing, 1u);
+            }
+        }
+        workgroupBarrier();
+        if lid == 0u {
+            any_climbing = atomicLoad(&climbing);
+        }
+        if workgroupUniformLoad(&any_climbing) == 0u {
+            break;
+        }
+    }
 }
