@@ -8,7 +8,7 @@
 use treelet::gpu::{shader_source, KernelInfo, Slot};
 
 fn parse(name: &str, source: &str) -> naga::Module {
-    let source = shader_source(source);
+    let source = shader_source(source, &[]);
     let module = naga::front::wgsl::parse_str(&source)
         .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(&source)));
     naga::valid::Validator::new(
@@ -116,7 +116,7 @@ fn every_include_file_is_embedded() {
     for entry in std::fs::read_dir(&dir).unwrap() {
         let name = entry.unwrap().file_name().into_string().unwrap();
         let expanded = std::panic::catch_unwind(|| {
-            treelet::gpu::shader_source(&format!("#include \"{name}\"\n"))
+            treelet::gpu::shader_source(&format!("#include \"{name}\"\n"), &[])
         });
         assert!(
             expanded.is_ok_and(|text| !text.trim().is_empty()),

@@ -114,7 +114,7 @@ fn dp_equals_brute_force_on_gpu() {
             max_leaf_size,
             ..sah
         });
-        for m in [5u32, 6, 7] {
+        for m in [3u32, 4, 5, 6, 7, 8] {
             for seed in 0..4 {
                 let tris = random_soup(m as usize, 100 + seed * 7 + u64::from(m));
                 builder.settings = TreeletSettings {

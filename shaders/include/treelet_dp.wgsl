@@ -11,10 +11,11 @@
 //   3. dynamic programming over the subsets S of the leaves in increasing order (a subset's proper
 //      subsets come first): c(S) = min(Ci·a(S) + min_P (c(P) + c(S\P)), Ct·a(S)·t(S)), each
 //      unordered partition once (P over the non-empty subsets of S without its lowest bit, in
-//      increasing order, the first of equal costs kept). The costs live in a private array (every
-//      invocation indexes it with the same S and P: side by side, SIMD lanes load side-by-side
-//      words); a(S) and t(S) come from the boxes and counts of S's two halves (leaves 0-3 and
-//      4-7), tabulated once per treelet;
+//      increasing order, the first of equal costs kept). Written out per treelet size
+//      (`subset_costs`, generated: treelet_dp_unrolled.wgsl), so that the costs are values in
+//      registers, not words of a private array indexed by S and P; they are also stored in
+//      `dp_cost` for step 4. a(S) and t(S) come from the boxes and counts of S's two halves
+//      (leaves 0-3 and 4-7), tabulated once per treelet;
 //   4. if the optimal cost is lower than the current one, the new topology is written back
 //      breadth-first (left child = the best P, right = S\P), reusing the treelet's internal
 //      nodes in formation order (the root keeps its index), with boxes, N, C and parent links.
@@ -28,6 +29,9 @@
 // The including kernel declares `params: RoundParams` (treelet_round.wgsl), `nodes:
 // array<BvhNode>`, `parents: array<u32>`, `prim_counts: array<u32>`, `costs: array<f32>` (all
 // read_write storage) and `next_levels: array<u32>` (read_write storage).
+
+// Leaves per treelet, fixed per pipeline (`bvh::treelet`; MIN_TREELET_SIZE..=MAX_TREELET).
+override TREELET_SIZE: u32;
 
 // Subsets 1 ..= 2^MAX_TREELET - 2 (the full set is never stored).
 const DP_SLOTS: u32 = (1u << MAX_TREELET) - 2u;
@@ -93,6 +97,13 @@ fn subset_prims(s: u32) -> u32 {
     return low_prims[s & 15u] + high_prims[s >> 4u];
 }
 
+// c(S) of a subset of at least two leaves whose best partition costs `best`.
+fn internal_subset_cost(s: u32, best: f32) -> f32 {
+    return combine_cost(surface_area(subset_min(s), subset_max(s), params.zero), subset_prims(s), best);
+}
+
+#include "treelet_dp_unrolled.wgsl"
+
 // The best partition P of s (s has at least two leaves; the costs of its proper subsets are
 // stored) and its cost c(P) + c(S\P).
 fn best_partition(s: u32) -> vec2<u32> {
@@ -135,7 +146,7 @@ fn form_treelet(root: u32) -> f32 {
     take_leaf(0u, r.left_or_first);
     take_leaf(1u, r.right_or_count);
     internal_node[0] = root;
-    for (var count = 2u; count < params.treelet_size; count++) {
+    for (var count = 2u; count < TREELET_SIZE; count++) {
         var best = 0u;
         var best_area = -1.0;
         for (var i = 0u; i < count; i++) {
@@ -150,7 +161,7 @@ fn form_treelet(root: u32) -> f32 {
         take_leaf(count, children.y);
     }
     for (var i = 0u; i < MAX_TREELET; i++) {
-        if i < params.treelet_size {
+        if i < TREELET_SIZE {
             leaf_prims[i] = prim_counts[leaf_node[i]];
         } else {
             leaf_min[i] = vec3<f32>(F32_MAX);
@@ -182,8 +193,8 @@ fn child_code(part: u32, queued: u32) -> u32 {
 fn store_next_levels() {
     var level_of: array<u32, 2u * MAX_TREELET>;
     for (var i = 0u; i < MAX_TREELET; i++) {
-        let is_root = i < params.treelet_size && leaf_prims[i] >= params.next_gamma;
-        level_of[i] = select(0u, next_levels[leaf_node[min(i, params.treelet_size - 1u)]], is_root);
+        let is_root = i < TREELET_SIZE && leaf_prims[i] >= params.next_gamma;
+        level_of[i] = select(0u, next_levels[leaf_node[min(i, TREELET_SIZE - 1u)]], is_root);
     }
     for (var e = queued; e > 0u; e--) {
         let entry = e - 1u;
@@ -213,7 +224,7 @@ fn store_root_next_level(root: u32) {
 
 // Step 4, start: the full set goes to the root.
 fn begin_write_back(root: u32) {
-    queue_set[0] = (1u << params.treelet_size) - 1u;
+    queue_set[0] = (1u << TREELET_SIZE) - 1u;
     queue_node[0] = root;
     queued = 1u;
 }
@@ -268,20 +279,8 @@ fn write_back(root: u32, full_split: u32, full_cost: f32) {
 fn optimize_treelet(root: u32) {
     let current = form_treelet(root);
     build_half_tables();
-    let full = (1u << params.treelet_size) - 1u;
-    for (var s = 1u; s < full; s++) {
-        var c: f32;
-        if countOneBits(s) == 1u {
-            c = costs[leaf_node[firstTrailingBit(s)]];
-        } else {
-            let best = bitcast<f32>(best_partition(s).y);
-            c = combine_cost(surface_area(subset_min(s), subset_max(s), params.zero), subset_prims(s), best);
-        }
-        dp_cost[s - 1u] = c;
-    }
-    let best = best_partition(full);
-    let full_area = surface_area(subset_min(full), subset_max(full), params.zero);
-    let full_cost = combine_cost(full_area, subset_prims(full), bitcast<f32>(best.y));
+    let best = subset_costs();
+    let full_cost = internal_subset_cost((1u << TREELET_SIZE) - 1u, bitcast<f32>(best.y));
     if full_cost < current {
         write_back(root, best.x, full_cost);
     } else {

@@ -12,7 +12,6 @@ struct RoundParams {
     row_pitch: u32,
     // Nodes with at least gamma primitives root a treelet.
     gamma: u32,
-    treelet_size: u32,
     max_leaf_size: u32,
     ci: f32,
     ct: f32,
@@ -35,6 +34,7 @@ struct RoundParams {
     pad0: u32,
     pad1: u32,
     pad2: u32,
+    pad3: u32,
 }
 
 // The schedule buffer (u32 words): per level L = 1 ..= MAX_LEVEL_DISPATCHES + 1, the number of

@@ -106,7 +106,7 @@ fn team_write_back(root: u32, team: u32, full_split: u32, full_cost: f32) {
 
 // Steps 1-5 for the treelet rooted at `root`, by the invocation in lane `lane` of team `team`.
 fn optimize_treelet_team(root: u32, has_treelet: bool, team: u32, lane: u32) {
-    let m = params.treelet_size;
+    let m = TREELET_SIZE;
     let leaves = team * MAX_TREELET;
     let subsets = team * TEAM_SUBSETS;
     let halves = team * 16u;

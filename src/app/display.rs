@@ -62,7 +62,7 @@ impl ImageDisplay {
             .device
             .create_shader_module(wgpu::ShaderModuleDescriptor {
                 label: Some("image_display.wgsl"),
-                source: wgpu::ShaderSource::Wgsl(shader_source(DISPLAY_SHADER).into()),
+                source: wgpu::ShaderSource::Wgsl(shader_source(DISPLAY_SHADER, &[]).into()),
             });
         let pipeline = ctx
             .device

@@ -26,6 +26,8 @@ pub const SPLIT_SCALE_WORD: u32 = 1 + SPLIT_SEARCH_STEPS * SPLIT_SEARCH_CANDIDAT
 /// Largest treelet (leaves): each treelet invocation keeps the costs of its 2^8 subsets and
 /// the boxes of two halves of 4 leaves (`treelet_dp.wgsl`).
 pub const MAX_TREELET_SIZE: u32 = 8;
+/// Smallest treelet (leaves).
+pub const MIN_TREELET_SIZE: u32 = 3;
 /// Treelet levels a restructuring round gives one dispatch each at most; the levels above are
 /// climbed by one workgroup (`bvh::treelet`).
 pub const MAX_LEVEL_DISPATCHES: u32 = 24;

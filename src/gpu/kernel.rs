@@ -129,7 +129,7 @@ pub(crate) fn compile(ctx: &GpuContext, info: &KernelInfo, overrides: Overrides)
         .device
         .create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some(info.name),
-            source: wgpu::ShaderSource::Wgsl(shader_source(info.source).into()),
+            source: wgpu::ShaderSource::Wgsl(shader_source(info.source, overrides).into()),
         });
     let pipeline = ctx
         .device

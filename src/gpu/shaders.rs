@@ -1,6 +1,10 @@
 //! WGSL sources, embedded at compile time. Kernels live in `shaders/<data>_<op>.wgsl` (declared
 //! with `kernel!`), shared code in `shaders/include/*.wgsl`, pulled in by `#include "name.wgsl"`
-//! lines (each file once), and the shared constants in the generated `constants.wgsl`.
+//! lines (each file once), the shared constants in the generated `constants.wgsl` and the
+//! written-out treelet DP in the generated `treelet_dp_unrolled.wgsl` (`bvh::treelet::dp_unrolled`).
+
+use super::constants::MAX_TREELET_SIZE;
+use super::Overrides;
 
 /// Shared include files: (file name, source).
 const INCLUDES: &[(&str, &str)] = &[
@@ -107,15 +111,17 @@ const INCLUDES: &[(&str, &str)] = &[
     ),
 ];
 
-/// `source` with its includes expanded (each file once); `constants.wgsl` is generated from
-/// `gpu::constants`. Panics on an unknown include: the set is fixed at compile time, and
-/// `tests/shaders.rs` expands every kernel.
-pub fn shader_source(source: &str) -> String {
+/// `source` with its includes expanded (each file once) for a pipeline with these override
+/// values; `constants.wgsl` and `treelet_dp_unrolled.wgsl` are generated, the latter for the
+/// override `TREELET_SIZE` (the largest size without it: naga's checks in `tests/shaders.rs`).
+/// Panics on an unknown include: the set is fixed at compile time, and `tests/shaders.rs` expands
+/// every kernel.
+pub fn shader_source(source: &str, overrides: Overrides) -> String {
     let mut included = Vec::new();
-    expand(source, &mut included)
+    expand(source, overrides, &mut included)
 }
 
-fn expand(source: &str, included: &mut Vec<String>) -> String {
+fn expand(source: &str, overrides: Overrides, included: &mut Vec<String>) -> String {
     let mut out = String::with_capacity(source.len());
     for line in source.lines() {
         if let Some(rest) = line.trim().strip_prefix("#include") {
@@ -126,12 +132,18 @@ fn expand(source: &str, included: &mut Vec<String>) -> String {
             included.push(file.to_string());
             if file == "constants.wgsl" {
                 out.push_str(&super::constants::wgsl());
+            } else if file == "treelet_dp_unrolled.wgsl" {
+                let treelet_size = overrides
+                    .iter()
+                    .find(|(name, _)| *name == "TREELET_SIZE")
+                    .map_or(MAX_TREELET_SIZE, |&(_, value)| value as u32);
+                out.push_str(&crate::bvh::treelet::dp_unrolled::wgsl(treelet_size));
             } else {
                 let (_, text) = INCLUDES
                     .iter()
                     .find(|(n, _)| *n == file)
                     .unwrap_or_else(|| panic!("unknown include {file}"));
-                out.push_str(&expand(text, included));
+                out.push_str(&expand(text, overrides, included));
             }
         } else {
             out.push_str(line);

@@ -67,6 +67,19 @@ pub fn subsets_by_size() -> Vec<u32> {
     subsets
 }
 
+/// The unordered partitions {P, S \ P} of a subset S of at least two leaves, each once: P over
+/// the non-empty subsets of S without its lowest leaf, in increasing order (the order in which
+/// every DP here and on the GPU evaluates them; ties keep the first P).
+pub fn partitions(s: u32) -> impl Iterator<Item = u32> {
+    let delta = (s - 1) & s;
+    let mut p = delta.wrapping_neg() & s;
+    std::iter::from_fn(move || {
+        let current = p;
+        p = p.wrapping_sub(delta) & s;
+        (current != 0).then_some(current)
+    })
+}
+
 /// One treelet leaf: its box, subtree cost and primitive count.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TreeletLeaf {
@@ -136,19 +149,14 @@ pub fn solve_treelet(leaves: &[TreeletLeaf], model: &CostModel) -> TreeletSoluti
             if s.count_ones() != size {
                 continue;
             }
-            // Each unordered partition once: P over the non-empty subsets of S without its
-            // lowest bit, in increasing order; ties keep the first (smallest) P.
-            let delta = (s - 1) & s;
-            let mut p = delta.wrapping_neg() & s;
             let mut best = f32::MAX;
             let mut best_p = 0;
-            while p != 0 {
+            for p in partitions(s) {
                 let c = sol.cost[p as usize] + sol.cost[(s ^ p) as usize];
                 if c < best {
                     best = c;
                     best_p = p;
                 }
-                p = p.wrapping_sub(delta) & s;
             }
             sol.cost[s as usize] = model.combine(sol.area[s as usize], sol.prims[s as usize], best);
             sol.split[s as usize] = best_p;

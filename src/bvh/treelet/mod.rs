@@ -11,6 +11,7 @@
 mod collapse;
 mod cpu;
 mod dp;
+pub(crate) mod dp_unrolled;
 mod nodes_compact;
 mod nodes_level;
 mod nodes_mark;
@@ -30,7 +31,9 @@ pub use treelets_optimize::TREELETS_OPTIMIZE;
 
 pub use rounds::RoundSchedule;
 
-pub use crate::gpu::constants::{MAX_GPU_LEAF_SIZE, MAX_LEVEL_DISPATCHES, MAX_TREELET_SIZE};
+pub use crate::gpu::constants::{
+    MAX_GPU_LEAF_SIZE, MAX_LEVEL_DISPATCHES, MAX_TREELET_SIZE, MIN_TREELET_SIZE,
+};
 
 use collapse::{Collapse, CollapseBuffers};
 use rounds::{Round, TreeletRounds, TreeletState, SCHEDULE_WORDS};
@@ -95,9 +98,9 @@ impl TreeletSettings {
 
     /// Checks the settings together with the SAH parameters (whose max leaf size the collapse uses).
     pub fn validate(&self, sah: &SahParams) -> Result<()> {
-        if !(3..=MAX_TREELET_SIZE).contains(&self.treelet_size) {
+        if !(MIN_TREELET_SIZE..=MAX_TREELET_SIZE).contains(&self.treelet_size) {
             return Err(Error::InvalidArgument(format!(
-                "treelet size must be 3..={MAX_TREELET_SIZE}, got {}",
+                "treelet size must be {MIN_TREELET_SIZE}..={MAX_TREELET_SIZE}, got {}",
                 self.treelet_size
             )));
         }

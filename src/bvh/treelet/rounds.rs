@@ -24,9 +24,11 @@ use super::dp::{subsets_by_size, CostModel};
 use super::nodes_level::NODES_LEVEL;
 use super::treelets_climb::TREELETS_CLIMB;
 use super::treelets_optimize::TREELETS_OPTIMIZE;
-use crate::gpu::constants::MAX_LEVEL_DISPATCHES;
+use std::sync::OnceLock;
+
+use crate::gpu::constants::{MAX_LEVEL_DISPATCHES, MAX_TREELET_SIZE, MIN_TREELET_SIZE};
 use crate::gpu::{
-    storage_buffer, storage_buffer_zeroed, GpuContext, Grid, ItemCount, Kernel, Recorder,
+    storage_buffer, storage_buffer_zeroed, GpuContext, Grid, ItemCount, Kernel, Overrides, Recorder,
 };
 use crate::Result;
 
@@ -37,7 +39,6 @@ pub struct RoundParams {
     count: u32,
     row_pitch: u32,
     gamma: u32,
-    treelet_size: u32,
     max_leaf_size: u32,
     ci: f32,
     ct: f32,
@@ -50,7 +51,7 @@ pub struct RoundParams {
     team_below: u32,
     /// γ of the next round (u32::MAX: none), whose levels the treelet kernels compute.
     next_gamma: u32,
-    _pad: [u32; 3],
+    _pad: [u32; 4],
 }
 const _: () = assert!(std::mem::size_of::<RoundParams>() == 64);
 
@@ -157,11 +158,40 @@ fn default_team_below(device: wgpu::DeviceType) -> u32 {
     }
 }
 
+/// The override values of each treelet size, MIN_TREELET_SIZE..=MAX_TREELET_SIZE.
+const TREELET_SIZE_OVERRIDES: [Overrides; 6] = [
+    &[("TREELET_SIZE", 3.0)],
+    &[("TREELET_SIZE", 4.0)],
+    &[("TREELET_SIZE", 5.0)],
+    &[("TREELET_SIZE", 6.0)],
+    &[("TREELET_SIZE", 7.0)],
+    &[("TREELET_SIZE", 8.0)],
+];
+const _: () =
+    assert!(TREELET_SIZE_OVERRIDES.len() == (MAX_TREELET_SIZE - MIN_TREELET_SIZE + 1) as usize);
+
+/// The treelet kernels of one treelet size (the WGSL override `TREELET_SIZE`, which selects the
+/// written-out DP of that size: `dp_unrolled`).
+struct TreeletKernels {
+    optimize: Kernel<RoundParams>,
+    climb: Kernel<RoundParams>,
+}
+
+impl TreeletKernels {
+    fn new(ctx: &GpuContext, treelet_size: u32) -> Self {
+        let overrides = TREELET_SIZE_OVERRIDES[(treelet_size - MIN_TREELET_SIZE) as usize];
+        Self {
+            optimize: Kernel::with_overrides(ctx, &TREELETS_OPTIMIZE, overrides),
+            climb: Kernel::with_overrides(ctx, &TREELETS_CLIMB, overrides),
+        }
+    }
+}
+
 /// The kernels of a round and their buckets.
 pub(crate) struct TreeletRounds {
     level: Kernel<RoundParams>,
-    optimize: Kernel<RoundParams>,
-    climb: Kernel<RoundParams>,
+    /// Per treelet size from MIN_TREELET_SIZE, compiled when first used.
+    treelet_kernels: [OnceLock<TreeletKernels>; TREELET_SIZE_OVERRIDES.len()],
     /// `subsets_by_size`, read by the teams.
     subsets: wgpu::Buffer,
     /// The roots of the dispatched levels and the first climbed one, each level in its slots
@@ -174,8 +204,7 @@ impl TreeletRounds {
     pub fn new(ctx: &crate::gpu::GpuContext) -> Result<Self> {
         Ok(Self {
             level: Kernel::new(ctx, &NODES_LEVEL),
-            optimize: Kernel::new(ctx, &TREELETS_OPTIMIZE),
-            climb: Kernel::new(ctx, &TREELETS_CLIMB),
+            treelet_kernels: Default::default(),
             subsets: storage_buffer(ctx, "treelet subsets by size", &subsets_by_size())?,
             roots: None,
             schedule: RoundSchedule::default(),
@@ -230,7 +259,6 @@ impl TreeletRounds {
             count: n,
             row_pitch: grid.row_pitch,
             gamma: round.gamma,
-            treelet_size: round.treelet_size,
             max_leaf_size: round.model.max_leaf_size,
             ci: round.model.ci,
             ct: round.model.ct,
@@ -240,7 +268,7 @@ impl TreeletRounds {
             levels_only: u32::from(round.levels_only),
             team_below: self.schedule.team_below(ctx.info.device_type),
             next_gamma: round.next_gamma,
-            _pad: [0; 3],
+            _pad: [0; 4],
         };
         let limit = count.limit(ctx);
         pass.dispatch(
@@ -265,6 +293,8 @@ impl TreeletRounds {
         if round.gamma == u32::MAX {
             return;
         }
+        let kernels = self.treelet_kernels[(round.treelet_size - MIN_TREELET_SIZE) as usize]
+            .get_or_init(|| TreeletKernels::new(ctx, round.treelet_size));
         let treelet_buffers = [
             state.nodes,
             state.parents,
@@ -279,7 +309,7 @@ impl TreeletRounds {
             params.level = level;
             let args = 4 * (SCHEDULE_ARGS + 3 * u64::from(level - 1));
             pass.dispatch_indirect(
-                &self.optimize,
+                &kernels.optimize,
                 state.schedule,
                 args,
                 &params,
@@ -290,7 +320,7 @@ impl TreeletRounds {
         let mut climb_buffers = treelet_buffers.to_vec();
         climb_buffers.extend([state.levels, state.arrivals, state.waves]);
         rec.pass("treelets climb").dispatch(
-            &self.climb,
+            &kernels.climb,
             Grid::workgroups(1, 1),
             &params,
             &climb_buffers,
