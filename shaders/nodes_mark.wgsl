@@ -68,7 +68,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     var kept = true;
-    var x = i;
+    // A node of more than max_leaf_size primitives is kept: so are its ancestors, which have more.
+    var x = select(i, 0u, prim_counts[i] > params.max_leaf_size);
     while x != 0u {
         x = parents[x];
         if prim_counts[x] > params.max_leaf_size {

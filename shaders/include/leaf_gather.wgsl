@@ -4,7 +4,8 @@
 // collapse's max leaf size limit). The including kernel declares `nodes`, `prim_indices`, `ref_tris` and
 // `params.has_refs`.
 
-const GATHER_STACK: u32 = 64u;
+// The stack holds disjoint subtrees of the leaf's, each of at least one primitive.
+const GATHER_STACK: u32 = MAX_GPU_LEAF_SIZE;
 
 var<private> gathered: array<u32, MAX_GPU_LEAF_SIZE>;
 
