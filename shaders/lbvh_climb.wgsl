@@ -33,8 +33,10 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
     let j = gid.x + gid.y * params.row_pitch;
     leaf_count = min(params.count, count_limit[0]);
     var leaf = RangeNode(0u, 0u, 0u, 0u, 0u, false);
+    var leaf_box: Aabb;
     if j < leaf_count {
-        leaf = emit_leaf(j, prim_boxes[prim_indices[j]]);
+        leaf_box = prim_boxes[prim_indices[j]];
+        leaf = emit_leaf(j, leaf_box);
     }
-    climb(leaf, j < leaf_count, lid);
+    climb(leaf, leaf_box, j < leaf_count, lid);
 }

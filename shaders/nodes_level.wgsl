@@ -84,22 +84,32 @@ fn write_dispatch_args() {
     }
 }
 
+// The climbing node's count, cost and level (what it stored), carried up the climb: only the
+// sibling's are loaded.
+var<private> climbing_prims: u32;
+var<private> climbing_cost: f32;
+var<private> climbing_level: u32;
+
 // The first round's climb: a parent's count, cost and level from its children (emit_parent
 // stored its children, links and box), and its bucket if it roots a treelet.
 fn finish_parent(p: EmittedParent) {
     let node = p.range.node;
-    let left = p.children.x;
-    let right = p.children.y;
-    let prims = atomicLoad(&prim_counts[left]) + atomicLoad(&prim_counts[right]);
-    let children = bitcast<f32>(atomicLoad(&costs[left])) + bitcast<f32>(atomicLoad(&costs[right]));
+    let other = p.sibling;
+    let prims = climbing_prims + atomicLoad(&prim_counts[other]);
+    let children = climbing_cost + bitcast<f32>(atomicLoad(&costs[other]));
+    let cost = combine_cost(surface_area(p.lo, p.hi, params.zero), prims, children);
     atomicStore(&prim_counts[node], prims);
-    atomicStore(&costs[node], bitcast<u32>(combine_cost(surface_area(p.lo, p.hi, params.zero), prims, children)));
+    atomicStore(&costs[node], bitcast<u32>(cost));
     var level = 0u;
-    if is_root(node) {
-        level = max(child_level(left), child_level(right)) + 1u;
+    if prims >= params.gamma {
+        let own_level = select(0u, climbing_level, climbing_prims >= params.gamma);
+        level = max(own_level, child_level(other)) + 1u;
         bucket(node, level);
     }
     atomicStore(&levels[node], level);
+    climbing_prims = prims;
+    climbing_cost = cost;
+    climbing_level = level;
 }
 
 @compute @workgroup_size(WORKGROUP)
@@ -112,6 +122,7 @@ fn main(
     let n = min(params.count, count_limit[0]);
     leaf_count = n;
     var leaf = RangeNode(0u, 0u, 0u, 0u, 0u, false);
+    var leaf_box: Aabb;
     let has_leaf = params.levels_only == 0u && j < n;
     if params.levels_only != 0u {
         // Invocation j: internal node j, whose level the round before computed; no climb.
@@ -122,13 +133,16 @@ fn main(
             }
         }
     } else if has_leaf {
-        let b = prim_boxes[order[j]];
-        leaf = emit_leaf(j, b);
-        atomicStore(&prim_counts[leaf.node], 1u);
-        atomicStore(&costs[leaf.node], bitcast<u32>(params.ct * surface_area(b.min, b.max, params.zero)));
-        atomicStore(&levels[leaf.node], 0u);
+        leaf_box = prim_boxes[order[j]];
+        leaf = emit_leaf(j, leaf_box);
+        climbing_prims = 1u;
+        climbing_cost = params.ct * surface_area(leaf_box.min, leaf_box.max, params.zero);
+        climbing_level = 0u;
+        atomicStore(&prim_counts[leaf.node], climbing_prims);
+        atomicStore(&costs[leaf.node], bitcast<u32>(climbing_cost));
+        atomicStore(&levels[leaf.node], climbing_level);
     }
-    climb(leaf, has_leaf, lid);
+    climb(leaf, leaf_box, has_leaf, lid);
     // Release: the workgroup's roots are counted before the ticket is taken.
     storageBarrier();
     if lid == 0u {

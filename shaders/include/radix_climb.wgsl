@@ -127,16 +127,19 @@ fn emit_leaf(j: u32, b: Aabb) -> RangeNode {
 }
 
 // A parent the second arrival finished: its range node, its children and its box.
+// `sibling`: the child that is not the climbing node.
 struct EmittedParent {
     range: RangeNode,
     children: vec2<u32>,
+    sibling: u32,
     lo: vec3<f32>,
     hi: vec3<f32>,
 }
 
-// The second arrival at `r`'s parent (the sibling announced `sibling`): stores the parent's
-// children, their parent links and its box, the union of theirs.
-fn emit_parent(r: RangeNode, sibling: u32) -> EmittedParent {
+// The second arrival at `r` (box [lo, hi]) 's parent (the sibling announced `sibling`): stores the
+// parent's children, their parent links and its box, the union of theirs (the sibling's loaded,
+// `r`'s from the climb; min and max take the left child's first).
+fn emit_parent(r: RangeNode, lo: vec3<f32>, hi: vec3<f32>, sibling: u32) -> EmittedParent {
     let split = parent_split(r);
     let p = parent_range_node(r, sibling);
     let c = range_children(p, split);
@@ -144,25 +147,31 @@ fn emit_parent(r: RangeNode, sibling: u32) -> EmittedParent {
     atomicStore(&node_words[p.node * 8u + 7u], c.y);
     parents[c.x] = p.node;
     parents[c.y] = p.node;
-    let lo = min(load_min(c.x), load_min(c.y));
-    let hi = max(load_max(c.x), load_max(c.y));
-    store_box(p.node, lo, hi);
-    return EmittedParent(p, c, lo, hi);
+    let other = select(c.x, c.y, r.is_left);
+    let other_lo = load_min(other);
+    let other_hi = load_max(other);
+    let union_lo = min(select(other_lo, lo, r.is_left), select(lo, other_lo, r.is_left));
+    let union_hi = max(select(other_hi, hi, r.is_left), select(hi, other_hi, r.is_left));
+    store_box(p.node, union_lo, union_hi);
+    return EmittedParent(p, c, other, union_lo, union_hi);
 }
 
 var<workgroup> climbing: atomic<u32>;
 var<workgroup> any_climbing: u32;
 
-// Climbs from `leaf` (emit_leaf's, with the kernel's own data of it stored) when `has_leaf`: at
-// each parent the second arrival emits it (emit_parent), lets the kernel finish it
-// (`finish_parent`) and goes on, up to the root. Barriers need uniform control flow, so every
-// invocation of the workgroup calls this and steps the loop until all are done.
-fn climb(leaf: RangeNode, has_leaf: bool, lid: u32) {
+// Climbs from `leaf` (emit_leaf's, of box `leaf_box`, with the kernel's own data of it stored)
+// when `has_leaf`: at each parent the second arrival emits it (emit_parent), lets the kernel
+// finish it (`finish_parent`) and goes on, up to the root. The climbing node's box is carried,
+// only the sibling's is loaded. Barriers need uniform control flow, so every invocation of the
+// workgroup calls this and steps the loop until all are done.
+fn climb(leaf: RangeNode, leaf_box: Aabb, has_leaf: bool, lid: u32) {
     if lid == 0u {
         atomicStore(&climbing, 0u);
     }
     workgroupBarrier();
     var r = leaf;
+    var lo = leaf_box.min;
+    var hi = leaf_box.max;
     var is_climbing = has_leaf && r.node != 0u;
     if is_climbing {
         atomicAdd(&climbing, 1u);
@@ -182,9 +191,11 @@ fn climb(leaf: RangeNode, has_leaf: bool, lid: u32) {
         // Acquire: the sibling's data, stored before its arrival, is visible now.
         storageBarrier();
         if is_climbing {
-            let parent = emit_parent(r, sibling);
+            let parent = emit_parent(r, lo, hi, sibling);
             finish_parent(parent);
             r = parent.range;
+            lo = parent.lo;
+            hi = parent.hi;
             if r.node == 0u {
                 is_climbing = false;
                 atomicSub(&climbing, 1u);
