@@ -1,6 +1,7 @@
 // Pre-splitting step 2b (Karras & Aila 2013, §5), after the last step of the budget search
-// (splits_search.wgsl): per triangle, its reference count s_t + 1 at the scale found (the input
-// of the offsets scan); the scale's bits go to budget_state[SPLIT_SCALE_WORD].
+// (splits_search.wgsl): per triangle, its reference count s_t + 1 at the scale found (the low end
+// of the final interval; the input of the offsets scan); the scale's bits go to
+// budget_state[SPLIT_SCALE_WORD].
 #include "splits_search.wgsl"
 
 @compute @workgroup_size(64)

@@ -1,14 +1,67 @@
 // Pre-splitting step 2a (Karras & Aila 2013, §5), one dispatch per step of the budget search
-// (splits_search.wgsl): per triangle, its split count s_t at each of the step's candidate scales,
-// summed per workgroup, then into the step's words of `budget_state`.
+// (splits_search.wgsl): per triangle, the candidate scale of the step at which each of its splits
+// first fits, counted per workgroup, then added into the step's histogram in `budget_state`; the
+// workgroup that finishes last narrows the interval for the next step.
+// A triangle's split count s_t grows with the scale, so its k-th split fits from the first
+// candidate j with k³ ≤ c_j·q on: the splits that fit at the step's first candidate go to bin 0,
+// each further one up to the count at the last candidate to the bin its binary search over the
+// candidates finds. The sum at candidate j is then the count of bins 0..=j.
 #include "splits_search.wgsl"
 
-var<workgroup> workgroup_sums: array<atomic<u32>, SPLIT_SEARCH_CANDIDATES>;
+const WORKGROUP: u32 = 64u;
+// The binary search's first stride: the highest power of two of SPLIT_SEARCH_CANDIDATES.
+const FIRST_STRIDE: u32 = 1u << (31u - countLeadingZeros(SPLIT_SEARCH_CANDIDATES));
 
-@compute @workgroup_size(64)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
-    if lid < SPLIT_SEARCH_CANDIDATES {
-        atomicStore(&workgroup_sums[lid], 0u);
+var<workgroup> workgroup_bins: array<atomic<u32>, SPLIT_SEARCH_CANDIDATES>;
+var<workgroup> is_last: u32;
+
+// The scale of candidate j of [lo, hi).
+fn scale_at(lo: u32, hi: u32, j: u32) -> f32 {
+    return bitcast<f32>(candidate(lo, hi, j));
+}
+
+// The first candidate j of [lo, hi) with k³ ≤ c_j·q (the last candidate's holds): a binary
+// search with fixed strides (the same steps in every invocation).
+fn first_fitting(lo: u32, hi: u32, q: f32, k: u32) -> u32 {
+    let cube = f32(k * k * k);
+    var j = 0u;
+    for (var stride = FIRST_STRIDE; stride > 0u; stride >>= 1u) {
+        if j + stride <= SPLIT_SEARCH_CANDIDATES && !(cube <= scale_at(lo, hi, j + stride - 1u) * q) {
+            j += stride;
+        }
+    }
+    return j;
+}
+
+// The last workgroup of step `step`: the interval after it, from the step's histogram (the gap
+// after the last candidate whose sum fits the budget).
+fn narrow(step: u32) {
+    let lo = interval.x;
+    let hi = interval.y;
+    var new_lo = lo;
+    var new_hi = hi;
+    var sum = 0u;
+    for (var j = 0u; j < SPLIT_SEARCH_CANDIDATES; j++) {
+        sum += atomicLoad(&budget_state[STEP_BINS + step * SPLIT_SEARCH_CANDIDATES + j]);
+        let c = candidate(lo, hi, j);
+        if sum <= params.budget {
+            new_lo = c;
+        } else if new_hi == hi {
+            new_hi = c;
+        }
+    }
+    atomicStore(&budget_state[STEP_INTERVALS + 2u * step], new_lo);
+    atomicStore(&budget_state[STEP_INTERVALS + 2u * step + 1u], new_hi);
+}
+
+@compute @workgroup_size(WORKGROUP)
+fn main(
+    @builtin(global_invocation_id) gid: vec3<u32>,
+    @builtin(local_invocation_index) lid: u32,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+) {
+    for (var b = lid; b < SPLIT_SEARCH_CANDIDATES; b += WORKGROUP) {
+        atomicStore(&workgroup_bins[b], 0u);
     }
     if lid == 0u {
         interval = search_interval(params.step);
@@ -19,21 +72,35 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
         let q = priorities[i];
         let lo = interval.x;
         let hi = interval.y;
-        // s_t grows with E: nothing to add below the first candidate where it is not zero.
-        if splits_at(bitcast<f32>(candidate(lo, hi, SPLIT_SEARCH_CANDIDATES - 1u)), q) > 0u {
-            for (var j = 0u; j < SPLIT_SEARCH_CANDIDATES; j++) {
-                let s = splits_at(bitcast<f32>(candidate(lo, hi, j)), q);
-                if s > 0u {
-                    atomicAdd(&workgroup_sums[j], s);
-                }
+        let most = splits_at(scale_at(lo, hi, SPLIT_SEARCH_CANDIDATES - 1u), q);
+        if most > 0u {
+            let least = splits_at(scale_at(lo, hi, 0u), q);
+            if least > 0u {
+                atomicAdd(&workgroup_bins[0], least);
+            }
+            for (var k = least + 1u; k <= most; k++) {
+                atomicAdd(&workgroup_bins[first_fitting(lo, hi, q, k)], 1u);
             }
         }
     }
     workgroupBarrier();
-    if lid < SPLIT_SEARCH_CANDIDATES {
-        let sum = atomicLoad(&workgroup_sums[lid]);
-        if sum > 0u {
-            atomicAdd(&budget_state[1u + params.step * SPLIT_SEARCH_CANDIDATES + lid], sum);
+    for (var b = lid; b < SPLIT_SEARCH_CANDIDATES; b += WORKGROUP) {
+        let count = atomicLoad(&workgroup_bins[b]);
+        if count > 0u {
+            atomicAdd(&budget_state[STEP_BINS + params.step * SPLIT_SEARCH_CANDIDATES + b], count);
         }
+    }
+    // Release: the workgroup's counts are added before its ticket is taken.
+    storageBarrier();
+    if lid == 0u {
+        is_last = u32(atomicAdd(&budget_state[STEP_TICKETS + params.step], 1u) + 1u == nwg.x * nwg.y);
+    }
+    if workgroupUniformLoad(&is_last) == 0u {
+        return;
+    }
+    // Acquire: every workgroup's counts are visible.
+    storageBarrier();
+    if lid == 0u {
+        narrow(params.step);
     }
 }

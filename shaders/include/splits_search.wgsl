@@ -5,11 +5,12 @@
 // correctly rounded). E is the largest bit pattern below hi = (budget+1)³ / q_max whose sum fits
 // (non-negative floats order like their bits). The search narrows [0, hi) on the bit patterns:
 // each step evaluates the sums at SPLIT_SEARCH_CANDIDATES evenly spaced patterns at once and keeps
-// the gap after the last one that fits, a 16-ary search that needs 8 steps where bisection needs
-// 32. Every step's sums go to their own words of `budget_state` (zeroed before the stage), so the
-// interval before step k is a function of the sums of steps 0..k-1 that each workgroup replays
-// itself (`search_interval`): one dispatch per step, no dispatch to narrow the interval.
-// CPU twin: `budget_scale` and `splits_at` (src/bvh/presplit/cpu.rs).
+// the gap after the last one that fits, a 256-ary search that needs 4 steps where bisection needs
+// 32. A step counts, per candidate, the splits that first fit there (a histogram: the sum at
+// candidate j is the count of bins 0..=j), and the workgroup that finishes the step last (a
+// ticket; no workgroup waits for another) narrows the interval for the next step: one dispatch
+// per step. CPU twin: `budget_scale` (the same E by bisection) and `splits_at`
+// (src/bvh/presplit/cpu.rs).
 
 struct BudgetParams {
     count: u32,
@@ -21,8 +22,15 @@ struct BudgetParams {
 
 #include "constants.wgsl"
 
-// [0] largest q (bits; triangles_priority.wgsl), [1 + k·CANDIDATES + j] Σ s_t at candidate j of
-// step k, [SPLIT_SCALE_WORD] the scale found (bits of E; written by splits_assign, read by tests).
+// `budget_state` (zeroed before the stage): [0] the largest q (bits; triangles_priority.wgsl),
+// [STEP_TICKETS + k] the ticket of step k, [STEP_INTERVALS + 2k, + 1] the interval (lo, hi) after
+// step k, [STEP_BINS + k·CANDIDATES + j] step k's histogram, [SPLIT_SCALE_WORD] the scale found
+// (bits of E; written by splits_assign, read by tests). SPLIT_SCALE_WORD (gpu::constants) is the
+// word after the last step's histogram.
+const STEP_TICKETS: u32 = 1u;
+const STEP_INTERVALS: u32 = STEP_TICKETS + SPLIT_SEARCH_STEPS;
+const STEP_BINS: u32 = STEP_INTERVALS + 2u * SPLIT_SEARCH_STEPS;
+
 @group(0) @binding(0) var<uniform> params: BudgetParams;
 @group(0) @binding(1) var<storage, read> priorities: array<f32>;
 @group(0) @binding(2) var<storage, read_write> budget_state: array<atomic<u32>>;
@@ -45,37 +53,25 @@ fn splits_at(e: f32, q: f32) -> u32 {
 }
 
 // Candidate j (0-based) of [lo, hi): lo + floor((hi - lo) · (j + 1) / (CANDIDATES + 1)), in u32
-// arithmetic; consecutive candidates are at most ceil((hi - lo) / 16) apart.
+// arithmetic; consecutive candidates are at most ceil((hi - lo) / (CANDIDATES + 1)) apart.
 fn candidate(lo: u32, hi: u32, j: u32) -> u32 {
     let parts = SPLIT_SEARCH_CANDIDATES + 1u;
     let range = hi - lo;
     return lo + (range / parts) * (j + 1u) + ((range % parts) * (j + 1u)) / parts;
 }
 
-// The interval before step `steps`: [0, (budget + 1)³ / q_max), narrowed by the sums of steps
-// 0..steps-1. Sums grow with the candidate: each step keeps the gap from the last candidate that
-// fits (or lo) to the next one (or hi).
-fn search_interval(steps: u32) -> vec2<u32> {
+// The interval before step `step` (`steps` = SPLIT_SEARCH_STEPS: the final one, whose lo is E):
+// [0, (budget + 1)³ / q_max) before the first, else what the step before narrowed it to.
+fn search_interval(step: u32) -> vec2<u32> {
+    if step > 0u {
+        let at = STEP_INTERVALS + 2u * (step - 1u);
+        return vec2<u32>(atomicLoad(&budget_state[at]), atomicLoad(&budget_state[at + 1u]));
+    }
     let q_max = bitcast<f32>(atomicLoad(&budget_state[0]));
     let b = f32(params.budget + 1u);
-    var lo = 0u;
     var hi = 0u;
     if q_max > 0.0 {
         hi = bitcast<u32>(b * b * b / q_max);
     }
-    for (var k = 0u; k < steps; k++) {
-        var new_lo = lo;
-        var new_hi = hi;
-        for (var j = 0u; j < SPLIT_SEARCH_CANDIDATES; j++) {
-            let c = candidate(lo, hi, j);
-            if atomicLoad(&budget_state[1u + k * SPLIT_SEARCH_CANDIDATES + j]) <= params.budget {
-                new_lo = c;
-            } else if new_hi == hi {
-                new_hi = c;
-            }
-        }
-        lo = new_lo;
-        hi = new_hi;
-    }
-    return vec2<u32>(lo, hi);
+    return vec2<u32>(0u, hi);
 }

@@ -16,13 +16,19 @@ pub const MORTON_AXIS_BITS: u32 = 16;
 /// Splits per triangle at most in pre-splitting (pieces ≤ `MAX_SPLITS + 1`).
 pub const MAX_SPLITS: u32 = 31;
 /// Candidate scales the pre-splitting budget search evaluates per step (`splits_search.wgsl`):
-/// 15 split the interval in 16, so `SPLIT_SEARCH_STEPS` steps narrow 2^32 bit patterns to one.
-pub const SPLIT_SEARCH_CANDIDATES: u32 = 15;
+/// 255 split the interval in 256, so `SPLIT_SEARCH_STEPS` steps narrow 2^32 bit patterns to one.
+pub const SPLIT_SEARCH_CANDIDATES: u32 = 255;
 /// Steps of the pre-splitting budget search (one dispatch each).
-pub const SPLIT_SEARCH_STEPS: u32 = 8;
-/// Word of the budget search's state that holds the scale found: after q_max and the sums of
-/// every step's candidates (`splits_search.wgsl`).
-pub const SPLIT_SCALE_WORD: u32 = 1 + SPLIT_SEARCH_STEPS * SPLIT_SEARCH_CANDIDATES;
+pub const SPLIT_SEARCH_STEPS: u32 = 4;
+const _: () = assert!(
+    (SPLIT_SEARCH_CANDIDATES as u64 + 1).pow(SPLIT_SEARCH_STEPS) >= 1 << 32,
+    "the budget search must narrow every bit pattern interval to one"
+);
+/// Word of the budget search's state that holds the scale found: after q_max, a ticket per step,
+/// the interval after each step and each step's histogram of its candidates
+/// (`splits_search.wgsl`).
+pub const SPLIT_SCALE_WORD: u32 =
+    1 + 3 * SPLIT_SEARCH_STEPS + SPLIT_SEARCH_STEPS * SPLIT_SEARCH_CANDIDATES;
 /// Largest treelet (leaves): each treelet invocation keeps the costs of its 2^8 subsets and
 /// the boxes of two halves of 4 leaves (`treelet_dp.wgsl`).
 pub const MAX_TREELET_SIZE: u32 = 8;

@@ -111,7 +111,7 @@ pub fn splits_at(e: f32, q: f32) -> u32 {
 /// E = D³ of the budget search: the largest bit pattern below hi = (budget + 1)³ / q_max whose
 /// split sum fits the budget (non-negative floats order like their bits). Found here by bisection
 /// on the bit patterns (integer midpoints halve the interval exactly, and 32 halvings span every
-/// float from 0 to hi); `splits_count.wgsl` finds the same E by a 16-ary search.
+/// float from 0 to hi); `splits_count.wgsl` finds the same E by a 256-ary search.
 pub fn budget_scale(priorities: &[f32], budget: u32) -> f32 {
     let q_max = priorities.iter().copied().fold(0.0f32, f32::max);
     let b = (budget + 1) as f32;

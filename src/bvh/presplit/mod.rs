@@ -1,7 +1,7 @@
 //! Triangle pre-splitting on the GPU (Karras & Aila 2013, §5): large, badly fitting triangles
 //! become several references (clipped boxes of the same triangle) before the LBVH build, within a
 //! budget of β·N extra references. Stages: triangle boxes → scene box (reduction) → split
-//! priorities (`triangles_priority.wgsl`) → split counts under the budget by a 16-ary search
+//! priorities (`triangles_priority.wgsl`) → split counts under the budget by a 256-ary search
 //! (`splits_count.wgsl` per step, then `splits_assign.wgsl`) → reference offsets (exclusive
 //! scan) → recursive splitting at Morton-grid planes (`triangles_split.wgsl`). The reference
 //! count stays on the GPU: the LBVH stages after it are sized for N + β·N references and read the

@@ -1,8 +1,9 @@
 //! Pre-splitting step 2a (kernel `splits_count`; Karras & Aila 2013, §5): one dispatch per step of
-//! the budget search for the split counts, a 16-ary search of the scale E on its bit patterns
-//! (`SPLIT_SEARCH_STEPS` steps of `SPLIT_SEARCH_CANDIDATES` candidates, each step's sums kept, so
-//! that every workgroup replays the interval; shared code in `shaders/include/splits_search.wgsl`).
-//! Then `splits_assign`. CPU twin: `budget_scale` (the same E by bisection) and `splits_at`.
+//! the budget search for the split counts, a 256-ary search of the scale E on its bit patterns
+//! (`SPLIT_SEARCH_STEPS` steps of `SPLIT_SEARCH_CANDIDATES` candidates; each step counts where
+//! every split first fits, and its last workgroup narrows the interval for the next; shared code
+//! in `shaders/include/splits_search.wgsl`). Then `splits_assign`. CPU twin: `budget_scale` (the
+//! same E by bisection) and `splits_at`.
 
 use bytemuck::{Pod, Zeroable};
 
@@ -21,8 +22,8 @@ pub struct BudgetParams {
 const _: () = assert!(std::mem::size_of::<BudgetParams>() == 16);
 
 kernel!(
-    /// Per triangle: Σ s_t at each of the step's candidates (the interval replayed from the
-    /// sums of the steps before).
+    /// Per triangle: the candidate at which each of its splits first fits, counted; the last
+    /// workgroup narrows the interval.
     pub SPLITS_COUNT: BudgetParams = "splits_count"::"main", [64, 1, 1],
     [Read, ReadWrite, ReadWrite]
 );
