@@ -16,13 +16,15 @@
 // keeps) in its parent split's word of `arrivals` with an atomicExchange of far end + 1. The first
 // to arrive stops; the second reads its sibling's far end, zeroes the word (arrivals are zero
 // again after a climb), and finishes the parent. A node carries the δ at both its ends, so each
-// step loads the keys at one split only (the sibling's far end). `emit_leaf` and `emit_parent`
+// step loads the keys at one split only (the sibling's far end), and the climbing invocation
+// carries its node's box, so it loads only the sibling's. `emit_leaf` and `emit_parent`
 // write the nodes: children, parent links and boxes; `climb` runs the loop. Node data is shared
 // across workgroups, so it goes through atomics (node_words.wgsl), and storageBarriers order it
 // around the arrivals (release before, acquire after). The including kernel declares `keys:
 // array<vec2<u32>>` (the sorted keys, low word first), `arrivals: array<atomic<u32>>` and
 // `parents: array<u32>`, includes node_words.wgsl before this file, defines
-// `finish_parent(p: EmittedParent)` (what else it computes per parent, from its children), and
+// `finish_parent(p: EmittedParent)` (what else it computes per parent, from the climbing child's
+// data, which it may carry in private variables, and the sibling's), and
 // sets `leaf_count` before the climb.
 
 var<private> leaf_count: u32;
@@ -126,19 +128,18 @@ fn emit_leaf(j: u32, b: Aabb) -> RangeNode {
     return r;
 }
 
-// A parent the second arrival finished: its range node, its children and its box.
-// `sibling`: the child that is not the climbing node.
+// A parent the second arrival finished: its range node, its child that is not the climbing node
+// (`sibling`) and its box.
 struct EmittedParent {
     range: RangeNode,
-    children: vec2<u32>,
     sibling: u32,
     lo: vec3<f32>,
     hi: vec3<f32>,
 }
 
-// The second arrival at `r` (box [lo, hi]) 's parent (the sibling announced `sibling`): stores the
-// parent's children, their parent links and its box, the union of theirs (the sibling's loaded,
-// `r`'s from the climb; min and max take the left child's first).
+// The second arrival at the parent of `r`, whose box is [lo, hi] (the sibling announced
+// `sibling`): stores the parent's children, their parent links and its box, the union of theirs
+// (the sibling's loaded, `r`'s carried by the climb; min and max take the left child's first).
 fn emit_parent(r: RangeNode, lo: vec3<f32>, hi: vec3<f32>, sibling: u32) -> EmittedParent {
     let split = parent_split(r);
     let p = parent_range_node(r, sibling);
@@ -153,7 +154,7 @@ fn emit_parent(r: RangeNode, lo: vec3<f32>, hi: vec3<f32>, sibling: u32) -> Emit
     let union_lo = min(select(other_lo, lo, r.is_left), select(lo, other_lo, r.is_left));
     let union_hi = max(select(other_hi, hi, r.is_left), select(hi, other_hi, r.is_left));
     store_box(p.node, union_lo, union_hi);
-    return EmittedParent(p, c, other, union_lo, union_hi);
+    return EmittedParent(p, other, union_lo, union_hi);
 }
 
 var<workgroup> climbing: atomic<u32>;

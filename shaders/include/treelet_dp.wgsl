@@ -1,7 +1,7 @@
 // One treelet's restructuring by one invocation (Karras & Aila 2013, §4; the paper spreads it over
 // a warp): many treelets of one level are optimized side by side, one per invocation, and every
-// invocation runs the same loops (the treelet size is uniform), so a SIMD or SIMT machine runs
-// them in lockstep without divergence.
+// invocation runs the same code (the treelet size is a pipeline constant), so a SIMD or SIMT
+// machine runs them in lockstep without divergence.
 //   1. cost: the root's cost from its children, whose subtrees are final now;
 //   2. formation: start from the root's two children, then repeatedly expand the treelet leaf of
 //      largest surface area that is an internal node (first on ties), up to treelet_size leaves

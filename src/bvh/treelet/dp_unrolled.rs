@@ -12,11 +12,11 @@
 //! words one by one (field:224, trbvh (7,3): the treelet kernels 78 → 31 ms), and a GPU waits on
 //! local-memory loads.
 //!
-//! Each function stores every proper subset's cost in `dp_cost` (the write-back searches the best
-//! partitions of the new internal nodes there again) and returns the full set's best partition
-//! and its children's cost, as `best_partition` does. The order of operations is the CPU twin's
-//! (`solve_treelet`): subsets in increasing order, partitions in the order of `partitions`, the
-//! first of equal costs kept; `min` finds the same value as its strict compare.
+//! `subset_costs()` stores every proper subset's cost in `dp_cost` (the write-back searches the
+//! best partitions of the new internal nodes there again) and returns the full set's best
+//! partition and its children's cost, as `best_partition` does. The order of operations is the
+//! CPU twin's (`solve_treelet`): subsets in increasing order, partitions in the order of
+//! `partitions`, the first of equal costs kept; `min` finds the same value as its strict compare.
 
 use std::fmt::Write;
 

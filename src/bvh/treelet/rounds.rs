@@ -16,7 +16,11 @@
 //! treelets gives each a team of 32 invocations that runs the DP's subsets of one size side by
 //! side, as the paper does with a warp (latency: the levels near the top of a tree hold a few
 //! treelets each, and a tree has 20-40 levels per round, each waiting for the one before). Both
-//! find the same topology (same operations, same tie-breaking).
+//! find the same topology (same operations, same tie-breaking). The treelet size is a pipeline
+//! constant: the treelet kernels are compiled per size when first used, the lone DP written out
+//! for it (`dp_unrolled`).
+
+use std::sync::OnceLock;
 
 use bytemuck::{Pod, Zeroable};
 
@@ -24,8 +28,6 @@ use super::dp::{subsets_by_size, CostModel};
 use super::nodes_level::NODES_LEVEL;
 use super::treelets_climb::TREELETS_CLIMB;
 use super::treelets_optimize::TREELETS_OPTIMIZE;
-use std::sync::OnceLock;
-
 use crate::gpu::constants::{MAX_LEVEL_DISPATCHES, MAX_TREELET_SIZE, MIN_TREELET_SIZE};
 use crate::gpu::{
     storage_buffer, storage_buffer_zeroed, GpuContext, Grid, ItemCount, Kernel, Overrides, Recorder,
