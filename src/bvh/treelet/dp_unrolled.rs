@@ -1,8 +1,8 @@
 //! The treelet DP of one invocation (Karras & Aila 2013, §4, Algorithm 2) written out as WGSL for
 //! one treelet size: the generated include `treelet_dp_unrolled.wgsl`, whose `subset_costs()`
 //! `shaders/include/treelet_dp.wgsl` calls. The include is generated per pipeline for its
-//! override `TREELET_SIZE` (`gpu::shader_source`): a module holding every size's DP took
-//! lavapipe over 20 s per pipeline to compile.
+//! override `TREELET_SIZE` (`gpu::shader_source`), so that a module holds only the DP it runs (a
+//! GPU compiler allocates registers for the largest path in a module).
 //!
 //! Why generated: every subset and every partition of a treelet of m leaves is known before the
 //! treelet is, so the DP needs no loop and no index arithmetic. Written out, each subset's cost is
