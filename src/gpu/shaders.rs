@@ -3,7 +3,6 @@
 //! lines (each file once), the shared constants in the generated `constants.wgsl` and the
 //! written-out treelet DP in the generated `treelet_dp_unrolled.wgsl` (`bvh::treelet::dp_unrolled`).
 
-use super::constants::MAX_TREELET_SIZE;
 use super::Overrides;
 
 /// Shared include files: (file name, source).
@@ -111,11 +110,22 @@ const INCLUDES: &[(&str, &str)] = &[
     ),
 ];
 
+/// The text of a generated include for a pipeline's override values.
+type Generate = fn(Overrides) -> String;
+
+/// Generated include files: (file name, how its text is generated).
+const GENERATED: &[(&str, Generate)] = &[
+    ("constants.wgsl", |_| super::constants::wgsl()),
+    (
+        "treelet_dp_unrolled.wgsl",
+        crate::bvh::treelet::dp_unrolled::wgsl_for,
+    ),
+];
+
 /// `source` with its includes expanded (each file once) for a pipeline with these override
-/// values; `constants.wgsl` and `treelet_dp_unrolled.wgsl` are generated, the latter for the
-/// override `TREELET_SIZE` (the largest size without it: naga's checks in `tests/shaders.rs`).
-/// Panics on an unknown include: the set is fixed at compile time, and `tests/shaders.rs` expands
-/// every kernel.
+/// values; `GENERATED` includes are generated for them (`constants.wgsl`, and
+/// `treelet_dp_unrolled.wgsl` for the override `TREELET_SIZE`). Panics on an unknown include:
+/// the set is fixed at compile time, and `tests/shaders.rs` expands every kernel.
 pub fn shader_source(source: &str, overrides: Overrides) -> String {
     let mut included = Vec::new();
     expand(source, overrides, &mut included)
@@ -130,14 +140,8 @@ fn expand(source: &str, overrides: Overrides, included: &mut Vec<String>) -> Str
                 continue;
             }
             included.push(file.to_string());
-            if file == "constants.wgsl" {
-                out.push_str(&super::constants::wgsl());
-            } else if file == "treelet_dp_unrolled.wgsl" {
-                let treelet_size = overrides
-                    .iter()
-                    .find(|(name, _)| *name == "TREELET_SIZE")
-                    .map_or(MAX_TREELET_SIZE, |&(_, value)| value as u32);
-                out.push_str(&crate::bvh::treelet::dp_unrolled::wgsl(treelet_size));
+            if let Some((_, generate)) = GENERATED.iter().find(|(n, _)| *n == file) {
+                out.push_str(&generate(overrides));
             } else {
                 let (_, text) = INCLUDES
                     .iter()

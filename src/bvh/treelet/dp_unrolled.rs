@@ -22,10 +22,25 @@ use std::fmt::Write;
 
 use super::dp::partitions;
 use crate::gpu::constants::{MAX_TREELET_SIZE, MIN_TREELET_SIZE};
+use crate::gpu::Overrides;
+
+/// The pipeline-overridable constant that sets the treelet size (`override TREELET_SIZE` in
+/// treelet_dp.wgsl).
+pub const TREELET_SIZE_OVERRIDE: &str = "TREELET_SIZE";
+
+/// The include for a pipeline with these override values: `wgsl` of its `TREELET_SIZE`, or of
+/// the largest size without one (naga's checks in `tests/shaders.rs`, which set no overrides).
+pub fn wgsl_for(overrides: Overrides) -> String {
+    let treelet_size = overrides
+        .iter()
+        .find(|(name, _)| *name == TREELET_SIZE_OVERRIDE)
+        .map_or(MAX_TREELET_SIZE, |&(_, value)| value as u32);
+    wgsl(treelet_size)
+}
 
 /// The text of the include `treelet_dp_unrolled.wgsl` for treelets of `m` leaves
 /// (MIN_TREELET_SIZE..=MAX_TREELET_SIZE): `subset_costs()`, the DP over their subsets.
-pub fn wgsl(m: u32) -> String {
+fn wgsl(m: u32) -> String {
     assert!(
         (MIN_TREELET_SIZE..=MAX_TREELET_SIZE).contains(&m),
         "treelet size {m}"

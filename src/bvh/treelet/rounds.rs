@@ -25,6 +25,7 @@ use std::sync::OnceLock;
 use bytemuck::{Pod, Zeroable};
 
 use super::dp::{subsets_by_size, CostModel};
+use super::dp_unrolled::TREELET_SIZE_OVERRIDE;
 use super::nodes_level::NODES_LEVEL;
 use super::treelets_climb::TREELETS_CLIMB;
 use super::treelets_optimize::TREELETS_OPTIMIZE;
@@ -162,12 +163,12 @@ fn default_team_below(device: wgpu::DeviceType) -> u32 {
 
 /// The override values of each treelet size, MIN_TREELET_SIZE..=MAX_TREELET_SIZE.
 const TREELET_SIZE_OVERRIDES: [Overrides; 6] = [
-    &[("TREELET_SIZE", 3.0)],
-    &[("TREELET_SIZE", 4.0)],
-    &[("TREELET_SIZE", 5.0)],
-    &[("TREELET_SIZE", 6.0)],
-    &[("TREELET_SIZE", 7.0)],
-    &[("TREELET_SIZE", 8.0)],
+    &[(TREELET_SIZE_OVERRIDE, 3.0)],
+    &[(TREELET_SIZE_OVERRIDE, 4.0)],
+    &[(TREELET_SIZE_OVERRIDE, 5.0)],
+    &[(TREELET_SIZE_OVERRIDE, 6.0)],
+    &[(TREELET_SIZE_OVERRIDE, 7.0)],
+    &[(TREELET_SIZE_OVERRIDE, 8.0)],
 ];
 const _: () =
     assert!(TREELET_SIZE_OVERRIDES.len() == (MAX_TREELET_SIZE - MIN_TREELET_SIZE + 1) as usize);
