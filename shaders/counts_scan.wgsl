@@ -21,7 +21,11 @@ const ITEMS: u32 = SCAN_BLOCK / WORKGROUP;
 // Workgroups finished so far; zero before and after the dispatch.
 @group(0) @binding(4) var<storage, read_write> ticket: array<atomic<u32>>;
 
+// GROUPS² = WORKGROUP.
+const GROUPS: u32 = 16u;
+
 var<workgroup> partial: array<u32, 256>;
+var<workgroup> group_totals: array<u32, GROUPS>;
 var<workgroup> is_last: u32;
 
 // Element i of the column starting at `start`.
@@ -39,23 +43,33 @@ fn store(start: u32, i: u32, x: u32) {
 }
 
 // The workgroup's exclusive scan of the invocations' `total`s: (this invocation's prefix, the
-// sum of all). Every invocation calls it.
+// sum of all). Every invocation calls it. Three barriers (a Hillis-Steele scan takes two per
+// step, 16 for 256 invocations, and a barrier is what a workgroup pays most for on a CPU
+// device): GROUPS invocations each scan a group of GROUPS totals serially, then every invocation
+// adds the totals of the groups before its own.
 fn workgroup_scan(lid: u32, total: u32) -> vec2<u32> {
     partial[lid] = total;
     workgroupBarrier();
-    for (var offset = 1u; offset < WORKGROUP; offset <<= 1u) {
-        var t = partial[lid];
-        if lid >= offset {
-            t += partial[lid - offset];
+    if lid < GROUPS {
+        var run = 0u;
+        for (var k = 0u; k < GROUPS; k++) {
+            let x = partial[lid * GROUPS + k];
+            partial[lid * GROUPS + k] = run;
+            run += x;
         }
-        workgroupBarrier();
-        partial[lid] = t;
-        workgroupBarrier();
+        group_totals[lid] = run;
     }
-    let scanned = vec2<u32>(partial[lid] - total, partial[WORKGROUP - 1u]);
+    workgroupBarrier();
+    var before = partial[lid];
+    var all = 0u;
+    for (var g = 0u; g < GROUPS; g++) {
+        let t = group_totals[g];
+        before += select(0u, t, g < lid / GROUPS);
+        all += t;
+    }
     // Before `partial` is written again.
     workgroupBarrier();
-    return scanned;
+    return vec2<u32>(before, all);
 }
 
 // The last workgroup: every column's block totals scanned in place, SCAN_BLOCK at a time.

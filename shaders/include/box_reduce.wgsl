@@ -8,6 +8,8 @@
 
 const WORKGROUP: u32 = 256u;
 const PER_INVOCATION: u32 = REDUCE_TILE / WORKGROUP;
+// GROUPS² = WORKGROUP.
+const GROUPS: u32 = 16u;
 
 // The tile of a workgroup of a (possibly 2D) grid.
 fn tile_index(wid: vec3<u32>, groups: vec3<u32>) -> u32 {
@@ -21,16 +23,27 @@ fn add_to_box_words(lid: u32, lo: vec3<f32>, hi: vec3<f32>) {
     shared_min[lid] = lo;
     shared_max[lid] = hi;
     workgroupBarrier();
-    for (var stride = WORKGROUP / 2u; stride > 0u; stride >>= 1u) {
-        if lid < stride {
-            shared_min[lid] = min(shared_min[lid], shared_min[lid + stride]);
-            shared_max[lid] = max(shared_max[lid], shared_max[lid + stride]);
+    // Two barriers, not one per halving step (a barrier is what a workgroup pays most for on a
+    // CPU device): GROUPS invocations each reduce a group of GROUPS boxes, then invocation 0 the
+    // groups' boxes. Min and max are exact: the order
+    // changes at most the sign of a zero.
+    if lid < GROUPS {
+        for (var k = 1u; k < GROUPS; k++) {
+            shared_min[lid * GROUPS] = min(shared_min[lid * GROUPS], shared_min[lid * GROUPS + k]);
+            shared_max[lid * GROUPS] = max(shared_max[lid * GROUPS], shared_max[lid * GROUPS + k]);
         }
-        workgroupBarrier();
     }
-    if lid == 0u && shared_min[0].x <= shared_max[0].x {
+    workgroupBarrier();
+    if lid == 0u {
+        for (var g = 1u; g < GROUPS; g++) {
+            shared_min[0] = min(shared_min[0], shared_min[g * GROUPS]);
+            shared_max[0] = max(shared_max[0], shared_max[g * GROUPS]);
+        }
         let lo = shared_min[0];
         let hi = shared_max[0];
+        if lo.x > hi.x {
+            return;
+        }
         atomicMax(&box_words[0], order_bits(-lo.x));
         atomicMax(&box_words[1], order_bits(-lo.y));
         atomicMax(&box_words[2], order_bits(-lo.z));
