@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
 # The treelet rounds' schedule on a lent GPU, in one `device` call: every combination of
-# --level-dispatches and --team-below (the same tree each time, tested), per scene, trbvh (7,3).
+# --level-dispatches and --team-below (the same tree each time, tested), per scene, trbvh (7,3);
+# then lbvh and trbvh at each --climb-width.
 # Here, first:   bash ../shared/gpu/pack.sh
 # Then `run` with carry [".gpu", ".gl"] and the command:   bash scripts/gpu-schedules.sh
-# JSON lines go to $OUT/schedules.jsonl; a table of build ms and the two treelet stages is printed
-# last, fastest first per scene. SCENES, LEVELS, TEAMS and REPEATS override the sweep; with TREELET
+# JSON lines go to $OUT/schedules.jsonl and $OUT/climbs.jsonl; a table of the climb widths, then
+# one of build ms and the two treelet stages, fastest first per scene, are printed last. SCENES,
+# LEVELS, TEAMS, CLIMBS and REPEATS override the sweep; with TREELET
 # set to a treelet binary it runs that one here instead (a dry run on lavapipe:
 # TREELET=target/release/treelet SCENES=field:100 LEVELS=0,4 TEAMS=0,64 REPEATS=1 bash scripts/gpu-schedules.sh).
 set -u
@@ -19,6 +21,25 @@ for s in ${SCENES:-conference sibenik field:707}; do
       || echo "$s $opts: exit $? (see schedules.log)"
   done
 done
+# The climbs' workgroup width (`--climb-width`; one value per run: it is a device option), lbvh
+# and trbvh, the default (64) first.
+: > "$out/climbs.jsonl"
+for s in ${SCENES:-conference sibenik field:707}; do
+  for width in 64 ${CLIMBS:-32 128 256}; do
+    timeout 100 "$bin" bench --scene "$s" --builder lbvh,trbvh --climb-width "$width" --width 64 \
+      --height 64 --spp 1 --repeats "${REPEATS:-11}" >> "$out/climbs.jsonl" \
+      2>> "$out/schedules.log" || echo "$s climb width $width: exit $? (see schedules.log)"
+  done
+done
+python3 - "$out/climbs.jsonl" <<'PY'
+import json, sys
+rows = [json.loads(l) for l in open(sys.argv[1]) if l.startswith("{")]
+print("scene            builder  climb width  build ms  hierarchy ms  treelets ms  sah")
+for r in rows:
+    st = r["stages_ms"]
+    print(f"{r['scene'][-16:]:16} {r['builder']:8} {r['climb_width']:11} {r['build_ms']:9.3f}"
+          f" {st.get('hierarchy') or 0:13.3f} {st.get('treelets') or 0:12.3f} {r['sah']:.4f}")
+PY
 python3 - "$out/schedules.jsonl" <<'PY'
 import json, sys
 rows = [json.loads(l) for l in open(sys.argv[1]) if l.startswith("{")]

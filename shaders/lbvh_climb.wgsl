@@ -8,7 +8,8 @@
 #include "aabb.wgsl"
 #include "items.wgsl"
 
-const WORKGROUP: u32 = 64u;
+// Invocations per workgroup: 64, or the device's climb width (`Kernel::climb`; 8 on CPU devices).
+override WORKGROUP_WIDTH: u32 = 64u;
 
 @group(0) @binding(0) var<uniform> params: Items;
 // The sorted keys (low word first) and the primitive of each leaf.
@@ -28,7 +29,7 @@ const WORKGROUP: u32 = 64u;
 // Nothing beyond the children, parent links and box that emit_parent stores.
 fn finish_parent(p: EmittedParent) {}
 
-@compute @workgroup_size(WORKGROUP)
+@compute @workgroup_size(WORKGROUP_WIDTH)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let j = gid.x + gid.y * params.row_pitch;
     leaf_count = min(params.count, count_limit[0]);

@@ -27,7 +27,8 @@
 #include "aabb.wgsl"
 #include "treelet_round.wgsl"
 
-const WORKGROUP: u32 = 64u;
+// Invocations per workgroup: 64, or the device's climb width (`Kernel::climb`; 8 on CPU devices).
+override WORKGROUP_WIDTH: u32 = 64u;
 // Workgroup size of treelets_optimize.wgsl.
 const OPTIMIZE_WORKGROUP: u32 = 32u;
 const MAX_WORKGROUPS_X: u32 = 65535u;
@@ -112,7 +113,7 @@ fn finish_parent(p: EmittedParent) {
     climbing_level = level;
 }
 
-@compute @workgroup_size(WORKGROUP)
+@compute @workgroup_size(WORKGROUP_WIDTH)
 fn main(
     @builtin(global_invocation_id) gid: vec3<u32>,
     @builtin(local_invocation_index) lid: u32,

@@ -10,7 +10,8 @@
 #include "bvh_node.wgsl"
 #include "items.wgsl"
 
-const WORKGROUP: u32 = 64u;
+// Invocations per workgroup: 64, or the device's climb width (`Kernel::climb`; 8 on CPU devices).
+override WORKGROUP_WIDTH: u32 = 64u;
 
 @group(0) @binding(0) var<uniform> params: Items;
 @group(0) @binding(1) var<storage, read> triangles: array<Triangle>;
@@ -23,7 +24,7 @@ const WORKGROUP: u32 = 64u;
 #include "node_words.wgsl"
 #include "bottom_up_climb.wgsl"
 
-@compute @workgroup_size(WORKGROUP)
+@compute @workgroup_size(WORKGROUP_WIDTH)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let j = gid.x + gid.y * params.row_pitch;
     var node = 0u;

@@ -6,12 +6,12 @@
 
 mod common;
 
-use common::{gpu, missing_shared_scene, record_update};
+use common::{gpu, gpu_with_climb_width, missing_shared_scene, record_update};
 use treelet::anim::{load_animation, Animation, Explosion, Flag, RigidBodies};
 use treelet::bvh::treelet::TreeletSettings;
 use treelet::bvh::{sah_cost, validate, Builder, SahParams, TreeUpdater, UpdateMode};
 use treelet::device::{Geometry, Tree};
-use treelet::gpu::{ParamSlab, Recorder};
+use treelet::gpu::{GpuContext, ParamSlab, Recorder};
 use treelet::scene::{shared_scenes_dir, BartScene, Triangle};
 
 /// Small versions of the built-in animations.
@@ -159,6 +159,36 @@ fn refits_keep_valid_boxes_and_lose_quality_when_the_mesh_bursts() {
             mode.name()
         );
     }
+}
+
+/// Refits climb the tree (`nodes_refit`) to the same bit-identical boxes at a GPU's workgroup
+/// width (64) as at the software driver's (8), frame after frame.
+#[test]
+fn refits_are_the_same_at_every_climb_width() {
+    let params = SahParams::default();
+    let refit_frames = |ctx: &GpuContext| {
+        let mut animation = Explosion::new(3);
+        let geometry =
+            Geometry::upload(ctx, &animation.scene_at(animation.time_range().start)).unwrap();
+        let mut tree = Tree::empty(ctx).unwrap();
+        let mut updater = TreeUpdater::new(ctx, UpdateMode::REFITS[0], &params).unwrap();
+        let mut frames = Vec::new();
+        for t in check_times(&animation) {
+            let mut slab = ParamSlab::new(ctx);
+            let mut rec = Recorder::new(ctx, &mut slab, None);
+            animation.animate(&mut rec, t, &geometry).unwrap();
+            updater.record(&mut rec, &geometry, &[], &mut tree).unwrap();
+            rec.submit();
+            let bvh = tree.download(ctx).unwrap();
+            validate(&bvh, &geometry.read_triangles(ctx).unwrap()).unwrap();
+            frames.push(bytemuck::cast_slice::<_, u8>(&bvh.nodes).to_vec());
+        }
+        frames
+    };
+    assert!(
+        refit_frames(&gpu_with_climb_width(64)) == refit_frames(&gpu_with_climb_width(8)),
+        "refits at climb widths 64 and 8 differ"
+    );
 }
 
 #[cfg(feature = "app")]

@@ -229,6 +229,28 @@ fn bench_sort_tiles_build_the_same_trees() {
     assert!(stderr.contains("must be one of [8, 16, 32]"), "{stderr}");
 }
 
+/// `bench --climb-width` runs the bottom-up climbs at that workgroup width (the JSON says which
+/// ran); every width builds the same trees, and other values are refused.
+#[test]
+fn bench_climb_widths_build_the_same_trees() {
+    let run = |width: &str| quick_bench("lbvh,trbvh", &["--climb-width", width]);
+    let tree = |r: &serde_json::Value| (r["sah"].clone(), r["nodes"].clone(), r["valid"].clone());
+    let default = quick_bench("lbvh,trbvh", &[]);
+    for width in ["8", "64", "256"] {
+        for (record, reference) in run(width).iter().zip(&default) {
+            assert_eq!(record["climb_width"], width.parse::<u64>().unwrap());
+            assert_eq!(tree(record), tree(reference), "{record}");
+        }
+    }
+    let refused = treelet(&["bench", "--scene", "cornell", "--climb-width", "48"]);
+    assert!(!refused.status.success());
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert!(
+        stderr.contains("must be one of [8, 16, 32, 64, 128, 256]"),
+        "{stderr}"
+    );
+}
+
 /// `bench --profile-dispatches` times every dispatch on its own: `dispatch_ms` lists them in
 /// order, as many per stage as the stage's dispatch count, each a declared kernel, and the
 /// stage times are their sums.

@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{assert_hits_match, gpu, random_soup, rng, scene_of, test_rays};
+use common::{assert_hits_match, gpu, gpu_with_climb_width, random_soup, rng, scene_of, test_rays};
 use glam::Vec3;
 use rand::Rng;
 use treelet::bvh::lbvh::{
@@ -14,6 +14,7 @@ use treelet::bvh::lbvh::{
 };
 use treelet::bvh::{sah_cost, validate, Bvh, SahParams};
 use treelet::device::{Geometry, Tree};
+use treelet::gpu::{GpuContext, CLIMB_WIDTHS};
 use treelet::scene::{load_scene, Triangle};
 use treelet::trace::closest_hits;
 
@@ -74,11 +75,15 @@ fn check_stages_against_cpu_twins(triangles: Vec<Triangle>) {
 }
 
 fn check_stages_with_key_bits(triangles: Vec<Triangle>, key_bits: u32) {
+    check_stages_on(gpu(), triangles, key_bits);
+}
+
+fn check_stages_on(ctx: &GpuContext, triangles: Vec<Triangle>, key_bits: u32) {
     let scene = scene_of(triangles);
     let tris = &scene.triangles;
-    let geometry = Geometry::upload(gpu(), &scene).unwrap();
-    let mut builder = LbvhBuilder::new(gpu()).with_key_bits(key_bits).unwrap();
-    let stages = builder.build_stages(gpu(), &geometry).unwrap();
+    let geometry = Geometry::upload(ctx, &scene).unwrap();
+    let mut builder = LbvhBuilder::new(ctx).with_key_bits(key_bits).unwrap();
+    let stages = builder.build_stages(ctx, &geometry).unwrap();
 
     let boxes = prim_boxes_cpu(tris);
     let bounds = centroid_bounds_cpu(&boxes);
@@ -129,6 +134,21 @@ fn stages_equal_cpu_twins_on_random_soup() {
 fn stages_equal_cpu_twins_on_scenes() {
     check_stages_against_cpu_twins(load_scene("cornell").unwrap().triangles);
     check_stages_against_cpu_twins(load_scene("field-10k").unwrap().triangles);
+}
+
+/// The climb builds the same hierarchy and bit-identical boxes at every workgroup width (the
+/// software driver runs 8 by default, GPUs 64), on sizes that leave a partial last workgroup.
+#[test]
+fn stages_equal_cpu_twins_at_every_climb_width() {
+    for width in CLIMB_WIDTHS {
+        let ctx = gpu_with_climb_width(width);
+        check_stages_on(&ctx, random_soup(3001, 12), LBVH_KEY_BITS);
+        check_stages_on(
+            &ctx,
+            load_scene("cornell").unwrap().triangles,
+            LBVH_KEY_BITS,
+        );
+    }
 }
 
 /// Narrower keys (the treelet builders' 32 bits, and odd widths that split an axis's bits) keep

@@ -5,7 +5,7 @@
 //! exactly the declared size, `var<storage, read>` or `read_write`); and the WGSL declares no
 //! binding the Rust side does not. Every shader file is declared.
 
-use treelet::gpu::{shader_source, KernelInfo, Slot};
+use treelet::gpu::{shader_source, KernelInfo, Slot, WORKGROUP_WIDTH_OVERRIDE};
 
 fn parse(name: &str, source: &str) -> naga::Module {
     let source = shader_source(source, &[]);
@@ -32,6 +32,32 @@ fn slot_of(space: naga::AddressSpace) -> Option<Slot> {
     }
 }
 
+/// The entry point's workgroup size, an overridable dimension at its default value (a workgroup
+/// width set by `gpu::WORKGROUP_WIDTH_OVERRIDE`, declared in Rust by its default).
+fn workgroup_size(module: &naga::Module, entry: &naga::EntryPoint) -> [u32; 3] {
+    let mut size = entry.workgroup_size;
+    for (dim, expr) in entry.workgroup_size_overrides.iter().flatten().enumerate() {
+        let Some(expr) = expr else { continue };
+        let naga::Expression::Override(o) = module.global_expressions[*expr] else {
+            panic!("workgroup size {dim}: not an override");
+        };
+        assert_eq!(
+            module.overrides[o].name.as_deref(),
+            Some(WORKGROUP_WIDTH_OVERRIDE),
+            "workgroup size {dim}: the override's name"
+        );
+        let init = module.overrides[o]
+            .init
+            .expect("the override has a default");
+        let naga::Expression::Literal(naga::Literal::U32(value)) = module.global_expressions[init]
+        else {
+            panic!("workgroup size {dim}: the default is not a u32 literal");
+        };
+        size[dim] = value;
+    }
+    size
+}
+
 fn check(info: &KernelInfo) {
     let who = format!("{}::{}", info.name, info.entry);
     let module = parse(&who, info.source);
@@ -42,7 +68,8 @@ fn check(info: &KernelInfo) {
         .unwrap_or_else(|| panic!("{who}: no such entry point"));
     assert_eq!(entry.stage, naga::ShaderStage::Compute, "{who}: stage");
     assert_eq!(
-        entry.workgroup_size, info.workgroup_size,
+        workgroup_size(&module, entry),
+        info.workgroup_size,
         "{who}: workgroup size"
     );
     let mut layouter = naga::proc::Layouter::default();

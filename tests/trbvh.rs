@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::{assert_hits_match, gpu, random_soup, rng, scene_of, test_rays};
+use common::{assert_hits_match, gpu, gpu_with_climb_width, random_soup, rng, scene_of, test_rays};
 use glam::Vec3;
 use rand::Rng;
 use treelet::bvh::lbvh::{build_lbvh_from_boxes_cpu, prim_boxes_cpu, TRBVH_KEY_BITS};
@@ -16,6 +16,7 @@ use treelet::bvh::treelet::{
 };
 use treelet::bvh::{sah_cost, validate, Bvh, SahParams};
 use treelet::device::{Geometry, Tree};
+use treelet::gpu::GpuContext;
 use treelet::scene::{load_scene, Triangle};
 use treelet::trace::closest_hits;
 
@@ -448,6 +449,27 @@ fn teams_and_lone_invocations_build_the_same_tree() {
     }
     builder.set_schedule(RoundSchedule::default());
     check_gpu_against_cpu(builder, random_soup(3000, 46), TreeletSettings::BALANCED);
+}
+
+/// The first round's climb (`nodes_level`) builds the same working tree at a GPU's workgroup
+/// width (64) and the widest as at the software driver's (8), every round after it too.
+#[test]
+fn every_climb_width_builds_the_same_tree() {
+    let scene = scene_of(random_soup(5003, 47));
+    let build = |ctx: &GpuContext| {
+        let geometry = Geometry::upload(ctx, &scene).unwrap();
+        let mut builder =
+            TrbvhBuilder::new(ctx, TreeletSettings::BALANCED, SahParams::default()).unwrap();
+        builder.build_stages(ctx, &geometry).unwrap()
+    };
+    let expected = build(&gpu_with_climb_width(8));
+    for width in [64, 256] {
+        let stages = build(&gpu_with_climb_width(width));
+        assert!(
+            stages.lbvh == expected.lbvh && stages.working == expected.working,
+            "climb width {width}: a different tree than at width 8"
+        );
+    }
 }
 
 /// The agreement checks hold for a device that fuses every Ci·A + children (as GPU compilers may):

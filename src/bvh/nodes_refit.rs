@@ -69,7 +69,7 @@ pub struct NodesRefit {
 impl NodesRefit {
     pub fn new(ctx: &GpuContext) -> Self {
         Self {
-            kernel: Kernel::new(ctx, &NODES_REFIT),
+            kernel: Kernel::climb(ctx, &NODES_REFIT),
         }
     }
 

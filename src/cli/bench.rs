@@ -15,7 +15,7 @@ use treelet::bvh::wide::{validate_wide, validate_wide_with_references, wide_sah_
 use treelet::bvh::{
     sah_cost, validate, validate_with_references, write_bvh, write_wide_bvh, Builder,
 };
-use treelet::gpu::{aggregate_stages, GpuContext, Spread, Timing, Warmup};
+use treelet::gpu::{aggregate_stages, check_climb_width, GpuContext, Spread, Timing, Warmup};
 use treelet::sort::check_tile_items;
 use treelet::trace::{PathTracer, TraceStats};
 use treelet::Result;
@@ -65,6 +65,11 @@ pub struct BenchArgs {
     /// keys; default: from the key count on GPUs, 32 on CPU devices). The trees are the same
     #[arg(long, value_parser = parse_sort_tile_items)]
     pub(super) sort_tile_items: Option<u32>,
+    /// Workgroup width of the bottom-up climbs (lbvh_climb, the first treelet round's
+    /// nodes_level, nodes_refit): 8, 16, 32, 64, 128 or 256 (default: 64 on GPUs, 8 on CPU
+    /// devices). The trees are the same
+    #[arg(long, value_parser = parse_climb_width)]
+    pub(super) climb_width: Option<u32>,
 }
 
 impl BenchArgs {
@@ -124,6 +129,8 @@ struct BenchRecord {
     team_below: Option<u32>,
     /// The radix sort's keys per invocation asked for (null: chosen per sort).
     sort_tile_items: Option<u32>,
+    /// The climbs' workgroup width in effect.
+    climb_width: u32,
     adapter: String,
     triangles: usize,
     /// Triangle references in the leaves: the triangle count, plus the pieces of split
@@ -177,6 +184,12 @@ struct BenchRecord {
 fn parse_sort_tile_items(value: &str) -> std::result::Result<u32, String> {
     let items = value.parse().map_err(|e| format!("{e}"))?;
     check_tile_items(items).map_err(|e| e.to_string())
+}
+
+/// A climb's workgroup width: one of `CLIMB_WIDTHS`.
+fn parse_climb_width(value: &str) -> std::result::Result<u32, String> {
+    let width = value.parse().map_err(|e| format!("{e}"))?;
+    check_climb_width(width).map_err(|e| e.to_string())
 }
 
 /// One dispatch of a build timed on its own: its stage, kernel and GPU time.
@@ -305,6 +318,7 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
                 .treelet_settings()
                 .map(|_| schedule.team_below(gpu.info.device_type)),
             sort_tile_items: gpu.sort_tile_items,
+            climb_width: gpu.climb_width(),
             adapter: gpu.adapter_description(),
             triangles: scene.triangles.len(),
             references: bvh.prim_indices.len(),

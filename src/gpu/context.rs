@@ -19,6 +19,10 @@ pub struct GpuOptions {
     /// Keys per invocation of every radix sort's tile (one of `sort::SORT_TILE_ITEMS`), instead of
     /// `sort::tile_items` of the length and device: for `bench` to compare them.
     pub sort_tile_items: Option<u32>,
+    /// Workgroup width of the bottom-up climbs (one of `gpu::CLIMB_WIDTHS`) instead of the
+    /// device's default (`gpu::default_climb_width`): for `bench` to compare them, and for tests to
+    /// run a GPU's width on a CPU device.
+    pub climb_width: Option<u32>,
 }
 
 /// An open device with what the rest of the crate needs to know about it.
@@ -33,6 +37,8 @@ pub struct GpuContext {
     pub profile_dispatches: bool,
     /// `GpuOptions::sort_tile_items`.
     pub sort_tile_items: Option<u32>,
+    /// `GpuOptions::climb_width`.
+    pub climb_width: Option<u32>,
     /// Kernels by (file, entry point, overridden constants with their values' bits), compiled
     /// once per device.
     kernels: Mutex<HashMap<KernelKey, CompiledKernel>>,
@@ -96,9 +102,13 @@ impl GpuContext {
         if let Some(items) = options.sort_tile_items {
             crate::sort::check_tile_items(items)?;
         }
+        if let Some(width) = options.climb_width {
+            super::kernel::check_climb_width(width)?;
+        }
         Ok(Self {
             profile_dispatches: options.profile_dispatches,
             sort_tile_items: options.sort_tile_items,
+            climb_width: options.climb_width,
             ..Self::from_device(adapter, device, queue)?
         })
     }
@@ -158,6 +168,7 @@ impl GpuContext {
             timestamps,
             profile_dispatches: false,
             sort_tile_items: None,
+            climb_width: None,
             info,
             kernels: Mutex::default(),
         })
@@ -231,6 +242,13 @@ impl GpuContext {
             .entry(key)
             .or_insert_with(|| compile(self, info, overrides))
             .clone()
+    }
+
+    /// Workgroup width of the bottom-up climbs: `GpuOptions::climb_width`, else the device's
+    /// default (`gpu::default_climb_width`).
+    pub fn climb_width(&self) -> u32 {
+        self.climb_width
+            .unwrap_or_else(|| super::default_climb_width(self.info.device_type))
     }
 
     /// Largest storage buffer binding this device accepts, in bytes.

@@ -25,7 +25,10 @@ pub use buffers::{
 pub use context::{GpuContext, GpuOptions};
 pub use item_count::ItemCount;
 pub(crate) use kernel::kernel;
-pub use kernel::{Grid, Items, Kernel, KernelDecl, KernelInfo, Overrides, Slot};
+pub use kernel::{
+    check_climb_width, default_climb_width, Grid, Items, Kernel, KernelDecl, KernelInfo, Overrides,
+    Slot, CLIMB_WIDTHS, WORKGROUP_WIDTH_OVERRIDE,
+};
 pub use param_slab::ParamSlab;
 pub use readback::Readback;
 pub use recorder::{Pass, Recorder};

@@ -22,6 +22,16 @@ pub fn gpu() -> &'static GpuContext {
     })
 }
 
+/// A device of the test GPU's adapter with the bottom-up climbs at `width` invocations per
+/// workgroup (`GpuOptions::climb_width`): a GPU's width on the software driver, and the reverse.
+pub fn gpu_with_climb_width(width: u32) -> GpuContext {
+    GpuContext::new(&GpuOptions {
+        climb_width: Some(width),
+        ..GpuOptions::default()
+    })
+    .expect("a Vulkan adapter (run scripts/install-deps.sh)")
+}
+
 pub fn rng(seed: u64) -> Pcg64 {
     Pcg64::seed_from_u64(seed)
 }

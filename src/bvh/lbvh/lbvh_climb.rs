@@ -139,7 +139,7 @@ pub(crate) struct ClimbBuffers<'a> {
 impl LbvhClimb {
     pub fn new(ctx: &crate::gpu::GpuContext) -> Self {
         Self {
-            kernel: Kernel::new(ctx, &LBVH_CLIMB),
+            kernel: Kernel::climb(ctx, &LBVH_CLIMB),
         }
     }
 

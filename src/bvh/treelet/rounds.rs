@@ -192,6 +192,10 @@ impl TreeletKernels {
 
 /// The kernels of a round and their buckets.
 pub(crate) struct TreeletRounds {
+    /// `nodes_level` for the first round's climb (`Kernel::climb`: the device's climb
+    /// width) and for the later rounds (one pass over the internal nodes, a ticket per workgroup:
+    /// the declared width).
+    climb_level: Kernel<RoundParams>,
     level: Kernel<RoundParams>,
     /// Per treelet size from MIN_TREELET_SIZE, compiled when first used.
     treelet_kernels: [OnceLock<TreeletKernels>; TREELET_SIZE_OVERRIDES.len()],
@@ -206,6 +210,7 @@ pub(crate) struct TreeletRounds {
 impl TreeletRounds {
     pub fn new(ctx: &crate::gpu::GpuContext) -> Result<Self> {
         Ok(Self {
+            climb_level: Kernel::climb(ctx, &NODES_LEVEL),
             level: Kernel::new(ctx, &NODES_LEVEL),
             treelet_kernels: Default::default(),
             subsets: storage_buffer(ctx, "treelet subsets by size", &subsets_by_size())?,
@@ -257,7 +262,12 @@ impl TreeletRounds {
         let dispatched = self.dispatched(n, round.gamma);
         let roots = self.roots.as_ref().expect("reserve() allocates the roots");
         // One invocation per leaf, or per internal node when only levels are computed.
-        let grid = self.level.grid(ctx, n);
+        let level = if round.levels_only {
+            &self.level
+        } else {
+            &self.climb_level
+        };
+        let grid = level.grid(ctx, n);
         let mut params = RoundParams {
             count: n,
             row_pitch: grid.row_pitch,
@@ -275,7 +285,7 @@ impl TreeletRounds {
         };
         let limit = count.limit(ctx);
         pass.dispatch(
-            &self.level,
+            level,
             grid,
             &params,
             &[
