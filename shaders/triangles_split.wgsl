@@ -67,45 +67,57 @@ struct Clipped {
     empty: bool,
 }
 
-// Box of the triangle clipped to [lo, hi], intersected with [lo, hi].
+// Box of the triangle clipped to [lo, hi], intersected with [lo, hi]. Sutherland–Hodgman over
+// the six planes, the polygon alternating between the two halves of `poly` (no copy back). A plane
+// that keeps every vertex leaves the polygon as it is and is skipped; one that keeps none empties
+// it. Both give what the full clip gives (the CPU twin's `clip_triangle`), without its work.
 fn clip_triangle(t: Triangle, lo: vec3<f32>, hi: vec3<f32>) -> Clipped {
-    var poly: array<vec3<f32>, MAX_POLYGON>;
-    var next: array<vec3<f32>, MAX_POLYGON>;
+    var poly: array<vec3<f32>, 2u * MAX_POLYGON>;
     poly[0] = t.v0;
     poly[1] = t.v1;
     poly[2] = t.v2;
     var n = 3u;
-    for (var plane = 0u; plane < 6u; plane++) {
+    var src = 0u;
+    for (var plane = 0u; plane < 6u && n > 0u; plane++) {
         let axis = plane % 3u;
         let keep_below = plane >= 3u;
         let bound = select(lo[axis], hi[axis], keep_below);
-        var m = 0u;
+        var kept = 0u;
         for (var k = 0u; k < n; k++) {
-            let a = poly[k];
-            let b = poly[(k + 1u) % n];
-            let a_in = select(a[axis] >= bound, a[axis] <= bound, keep_below);
-            let b_in = select(b[axis] >= bound, b[axis] <= bound, keep_below);
-            if a_in && m < MAX_POLYGON {
-                next[m] = a;
-                m++;
-            }
-            if a_in != b_in && m < MAX_POLYGON {
-                let s = (bound - a[axis]) / (b[axis] - a[axis]);
-                var p = a + vec3<f32>(s * (b.x - a.x), s * (b.y - a.y), s * (b.z - a.z));
-                p[axis] = bound;
-                next[m] = p;
-                m++;
+            let v = poly[src + k][axis];
+            kept += select(0u, 1u, select(v >= bound, v <= bound, keep_below));
+        }
+        if kept == n {
+            continue;
+        }
+        let dst = MAX_POLYGON - src;
+        var m = 0u;
+        if kept != 0u {
+            for (var k = 0u; k < n; k++) {
+                let a = poly[src + k];
+                let b = poly[src + select(k + 1u, 0u, k + 1u == n)];
+                let a_in = select(a[axis] >= bound, a[axis] <= bound, keep_below);
+                let b_in = select(b[axis] >= bound, b[axis] <= bound, keep_below);
+                if a_in && m < MAX_POLYGON {
+                    poly[dst + m] = a;
+                    m++;
+                }
+                if a_in != b_in && m < MAX_POLYGON {
+                    let s = (bound - a[axis]) / (b[axis] - a[axis]);
+                    var p = a + vec3<f32>(s * (b.x - a.x), s * (b.y - a.y), s * (b.z - a.z));
+                    p[axis] = bound;
+                    poly[dst + m] = p;
+                    m++;
+                }
             }
         }
         n = m;
-        for (var k = 0u; k < n; k++) {
-            poly[k] = next[k];
-        }
+        src = dst;
     }
     var out = Clipped(vec3<f32>(F32_MAX), vec3<f32>(-F32_MAX), n == 0u);
     for (var k = 0u; k < n; k++) {
-        out.lo = min(out.lo, poly[k]);
-        out.hi = max(out.hi, poly[k]);
+        out.lo = min(out.lo, poly[src + k]);
+        out.hi = max(out.hi, poly[src + k]);
     }
     out.lo = clamp(out.lo, lo, hi);
     out.hi = clamp(out.hi, lo, hi);
