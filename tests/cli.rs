@@ -251,6 +251,27 @@ fn bench_climb_widths_build_the_same_trees() {
     );
 }
 
+/// `bench --wide-collapse optimal` traces the SAH-optimal wide tree (valid, its SAH the optimum,
+/// fewer nodes than the greedy conversion's); without the wide layout it is refused.
+#[test]
+fn bench_traces_the_optimal_wide_collapse() {
+    let greedy = quick_bench("trbvh", &["--layout", "wide"]);
+    let optimal = quick_bench("trbvh", &["--layout", "wide", "--wide-collapse", "optimal"]);
+    assert_eq!(greedy[0]["wide_collapse"], "greedy");
+    assert_eq!(optimal[0]["wide_collapse"], "optimal");
+    assert_eq!(optimal[0]["valid"], true);
+    assert_eq!(optimal[0]["wide_sah"], optimal[0]["wide_sah_optimal"]);
+    assert_eq!(
+        optimal[0]["wide_sah_optimal"],
+        greedy[0]["wide_sah_optimal"]
+    );
+    assert!(optimal[0]["nodes"].as_u64() < greedy[0]["nodes"].as_u64());
+    let refused = treelet(&["bench", "--scene", "cornell", "--wide-collapse", "optimal"]);
+    assert!(!refused.status.success());
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert!(stderr.contains("applies to the wide layout"), "{stderr}");
+}
+
 /// `bench --profile-dispatches` times every dispatch on its own: `dispatch_ms` lists them in
 /// order, as many per stage as the stage's dispatch count, each a declared kernel, and the
 /// stage times are their sums.

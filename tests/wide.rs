@@ -2,7 +2,8 @@
 //! as its CPU twin from the same binary tree, for every builder and every level schedule; wide
 //! trees pass the validator (every reference once, slot boxes conservative), and the validator
 //! catches broken ones; closest and any hits through the wide layout equal brute force; the
-//! layout takes at most 0.7× the binary tree's bytes; files round-trip; misuse is an error.
+//! layout takes at most 0.7× the binary tree's bytes; files round-trip; misuse is an error. The
+//! SAH-optimal collapse (a CPU reference) makes valid trees that trace the same hits.
 
 mod common;
 
@@ -13,13 +14,14 @@ use common::{
 use glam::Vec3;
 use treelet::bvh::treelet::TreeletSettings;
 use treelet::bvh::wide::{
-    max_wide_nodes, validate_wide, validate_wide_with_references, Layout, Slot, WideBvh, WIDTH,
+    max_wide_nodes, validate_wide, validate_wide_with_references, wide_sah_costs, Layout, Slot,
+    WideBvh, WIDTH,
 };
 use treelet::bvh::{
     build_sweep_sah, read_wide_bvh, validate, write_wide_bvh, Builder, Bvh, BvhNode, SahParams,
     TreeUpdater, UpdateMode, ValidationError, DEFAULT_SPLIT_PERCENT,
 };
-use treelet::device::{Geometry, Tree};
+use treelet::device::{Geometry, Tree, WideTree};
 use treelet::geometry::{Aabb, Ray};
 use treelet::scene::{load_scene, Scene, Triangle};
 use treelet::trace::{any_hits_wide, closest_hits, closest_hits_wide, PathTracer, RenderSettings};
@@ -182,6 +184,48 @@ fn wide_hits_equal_brute_force() {
         convert_wide(&mut tree);
         let hits = closest_hits_wide(gpu(), &geometry, &tree, &plain).unwrap();
         assert_hits_match(&scene.triangles, &rays, &hits);
+    }
+}
+
+/// The SAH-optimal collapse (the CPU reference `WideBvh::from_binary_optimal`) makes a valid wide
+/// tree of the program's cost, no more nodes than the greedy one, and uploaded it traces the
+/// brute-force hits (closest and any).
+#[test]
+fn optimal_collapse_is_valid_and_traces_brute_force_hits() {
+    let params = SahParams::default();
+    for (seed, scene) in [
+        scene_of(random_soup(3000, 8)),
+        load_scene("field-10k").unwrap(),
+    ]
+    .iter()
+    .enumerate()
+    {
+        let (geometry, mut tree) =
+            build_wide(scene, Builder::Trbvh(TreeletSettings::BALANCED), None);
+        let bvh = tree.download(gpu()).unwrap();
+        let greedy = tree.wide.as_ref().unwrap().download(gpu()).unwrap();
+        let optimal = WideBvh::from_binary_optimal(&bvh, &params).unwrap();
+        validate_wide(&optimal, &scene.triangles).unwrap();
+        assert!(
+            optimal.nodes.len() <= greedy.nodes.len(),
+            "{}: {} optimal nodes, {} greedy",
+            scene.name,
+            optimal.nodes.len(),
+            greedy.nodes.len()
+        );
+        let (greedy_sah, optimal_sah) = wide_sah_costs(&bvh, &params);
+        assert!(optimal_sah <= greedy_sah, "{}: SAH", scene.name);
+        tree.wide = Some(WideTree::upload(gpu(), &optimal).unwrap());
+        assert!(tree.wide.as_ref().unwrap().download(gpu()).unwrap() == optimal);
+        let rays = test_rays(&scene.triangles, 300, seed as u64 + 40);
+        let plain: Vec<Ray> = rays.iter().map(|(_, r)| *r).collect();
+        let hits = closest_hits_wide(gpu(), &geometry, &tree, &plain).unwrap();
+        assert_hits_match(&scene.triangles, &rays, &hits);
+        let oracle = oracle_hits(&scene.triangles, &rays);
+        let any = any_hits_wide(gpu(), &geometry, &tree, &plain).unwrap();
+        for (i, (a, o)) in any.iter().zip(&oracle).enumerate() {
+            assert_eq!(a.is_hit(), o.is_hit(), "{} ray {i}: any hit", scene.name);
+        }
     }
 }
 

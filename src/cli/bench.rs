@@ -11,10 +11,13 @@ use clap::Args;
 use serde::Serialize;
 use treelet::anim::load_still;
 use treelet::bvh::treelet::{RoundSchedule, MAX_LEVEL_DISPATCHES};
-use treelet::bvh::wide::{validate_wide, validate_wide_with_references, wide_sah_costs, Layout};
+use treelet::bvh::wide::{
+    validate_wide, validate_wide_with_references, wide_sah_costs, Layout, WideBvh,
+};
 use treelet::bvh::{
     sah_cost, validate, validate_with_references, write_bvh, write_wide_bvh, Builder,
 };
+use treelet::device::WideTree;
 use treelet::gpu::{aggregate_stages, check_climb_width, GpuContext, Spread, Timing, Warmup};
 use treelet::sort::check_tile_items;
 use treelet::trace::{PathTracer, TraceStats};
@@ -70,6 +73,18 @@ pub struct BenchArgs {
     /// devices). The trees are the same
     #[arg(long, value_parser = parse_climb_width)]
     pub(super) climb_width: Option<u32>,
+    /// How the wide layout collapses the binary tree: greedy (the GPU conversion) or optimal (the
+    /// SAH-optimal collapse of Ylitie et al., converted on the CPU and uploaded: a reference for
+    /// trace speed; the build's `wide` stage still times the GPU's greedy conversion)
+    #[arg(long, value_enum, default_value_t = WideCollapse::Greedy)]
+    wide_collapse: WideCollapse,
+}
+
+/// `bench --wide-collapse`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum WideCollapse {
+    Greedy,
+    Optimal,
 }
 
 impl BenchArgs {
@@ -161,8 +176,11 @@ struct BenchRecord {
     dispatch_ms: Option<Vec<DispatchTime>>,
     /// SAH of the binary tree.
     sah: f32,
-    /// Wide layout: SAH of the wide tree (greedy collapse, as converted) and of the SAH-optimal
-    /// collapse of the same binary tree (Ylitie et al.'s DP; computed, not built).
+    /// Wide layout: the collapse of the traced wide tree ("greedy": the GPU conversion's;
+    /// "optimal": the CPU reference's, uploaded).
+    wide_collapse: Option<&'static str>,
+    /// Wide layout: SAH of the traced wide tree (of its collapse, `wide_collapse`) and of the
+    /// SAH-optimal collapse of the same binary tree (Ylitie et al.'s DP).
     wide_sah: Option<f64>,
     wide_sah_optimal: Option<f64>,
     valid: bool,
@@ -211,6 +229,11 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
         repeats: args.repeats,
     };
     let layouts = &args.trace.layout;
+    if args.wide_collapse == WideCollapse::Optimal && !layouts.contains(&Layout::Wide) {
+        return Err(treelet::Error::InvalidArgument(
+            "--wide-collapse optimal applies to the wide layout (add --layout wide)".into(),
+        ));
+    }
     let schedules = args.schedules(&builders)?;
     let runs: Vec<(Builder, RoundSchedule, Layout)> = builders
         .iter()
@@ -225,9 +248,14 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
         })
         .collect();
     for &(builder, schedule, layout) in &runs {
-        let (geometry, tree, report) =
+        let (geometry, mut tree, report) =
             builder.build(gpu, &scene, &params, &timing, layout, schedule)?;
         let bvh = tree.download(gpu)?;
+        let optimal = layout == Layout::Wide && args.wide_collapse == WideCollapse::Optimal;
+        if optimal {
+            let wide = WideBvh::from_binary_optimal(&bvh, &params)?;
+            tree.wide = Some(WideTree::upload(gpu, &wide)?);
+        }
         let label = run_label(builder, schedule, layout);
         let references = builder.duplicates_references();
         let (validation, nodes, leaves, tree_bytes) = match &tree.wide {
@@ -341,7 +369,12 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
             dispatches: stages.iter().map(|s| s.dispatches).sum(),
             dispatch_ms,
             sah: sah_cost(&bvh, &params),
-            wide_sah: wide_sah.map(|c| c.0),
+            wide_collapse: (layout == Layout::Wide).then_some(if optimal {
+                "optimal"
+            } else {
+                "greedy"
+            }),
+            wide_sah: wide_sah.map(|c| if optimal { c.1 } else { c.0 }),
             wide_sah_optimal: wide_sah.map(|c| c.1),
             valid: validation.is_ok(),
             width: args.trace.width,

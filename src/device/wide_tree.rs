@@ -40,6 +40,25 @@ impl WideTree {
         })
     }
 
+    /// A wide tree made on the CPU (e.g. `WideBvh::from_binary_optimal`, a reference), uploaded
+    /// for tracing: its nodes, references and counts, as a conversion would leave them.
+    pub fn upload(ctx: &GpuContext, wide: &WideBvh) -> Result<Self> {
+        let (nodes, prims) = (wide.nodes.len() as u32, wide.prim_indices.len() as u32);
+        let tree = Self::new(ctx, nodes, prims, 12)?;
+        ctx.queue
+            .write_buffer(&tree.nodes, 0, bytemuck::cast_slice(&wide.nodes));
+        if prims > 0 {
+            ctx.queue.write_buffer(
+                &tree.prim_indices,
+                0,
+                bytemuck::cast_slice(&wide.prim_indices),
+            );
+        }
+        ctx.queue
+            .write_buffer(&tree.counters, 0, bytemuck::cast_slice(&[nodes, prims, 0]));
+        Ok(tree)
+    }
+
     /// (nodes, references) of the last conversion; blocks until the GPU is done. An error when
     /// the conversion ran out of room (a bug: the capacity bounds every binary tree).
     pub fn counts(&self, ctx: &GpuContext) -> Result<(u32, u32)> {

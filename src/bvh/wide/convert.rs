@@ -16,7 +16,8 @@
 use std::collections::VecDeque;
 
 use super::node::{exponent_scale, put_byte, WideBvh, WideNode, WIDTH};
-use crate::bvh::{Bvh, BvhNode};
+use super::optimal::OptimalCollapse;
+use crate::bvh::{Bvh, BvhNode, SahParams};
 use crate::{Error, Result};
 
 /// The largest leaf a wide node can hold (its count is a byte).
@@ -140,9 +141,28 @@ fn assign_slots(children: &[&BvhNode], centre: [f32; 3]) -> [usize; WIDTH] {
 }
 
 impl WideBvh {
-    /// Converts a binary tree (any builder's) into the wide layout. Fails on a leaf of more than
-    /// [`MAX_WIDE_LEAF_SIZE`] references.
+    /// Converts a binary tree (any builder's) into the wide layout, as the GPU does (the greedy
+    /// collapse). Fails on a leaf of more than [`MAX_WIDE_LEAF_SIZE`] references.
     pub fn from_binary(bvh: &Bvh) -> Result<WideBvh> {
+        Self::convert(bvh, |source| open_children(bvh, source))
+    }
+
+    /// Converts a binary tree with the SAH-optimal collapse (`OptimalCollapse` under `params`)
+    /// instead of the greedy one; slots and quantization as `from_binary`. A CPU reference: the
+    /// GPU conversion is greedy.
+    pub fn from_binary_optimal(bvh: &Bvh, params: &SahParams) -> Result<WideBvh> {
+        if bvh.nodes.is_empty() {
+            return Err(Error::InvalidArgument(
+                "cannot convert an empty tree".into(),
+            ));
+        }
+        let collapse = OptimalCollapse::new(bvh, params);
+        Self::convert(bvh, |source| collapse.children(bvh, source))
+    }
+
+    /// The conversion with the children of each wide node (binary nodes) from `children` of the
+    /// binary node it is made from.
+    fn convert(bvh: &Bvh, children: impl Fn(u32) -> Vec<u32>) -> Result<WideBvh> {
         if bvh.nodes.is_empty() {
             return Err(Error::InvalidArgument(
                 "cannot convert an empty tree".into(),
@@ -155,7 +175,7 @@ impl WideBvh {
         };
         let mut queue = VecDeque::from([(0usize, 0u32)]);
         while let Some((w, source)) = queue.pop_front() {
-            let children = open_children(bvh, source);
+            let children = children(source);
             let boxes: Vec<&BvhNode> = children.iter().map(|&c| &bvh.nodes[c as usize]).collect();
             let mut lo = boxes[0].min;
             let mut hi = boxes[0].max;
