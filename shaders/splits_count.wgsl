@@ -1,14 +1,15 @@
 // Pre-splitting step 2a (Karras & Aila 2013, §5), one dispatch per step of the budget search
-// (splits_search.wgsl): per triangle, the candidate scale of the step at which each of its splits
-// first fits, counted per workgroup, then added into the step's histogram in `budget_state`; the
-// workgroup that finishes last narrows the interval for the next step.
+// (splits_search.wgsl): per triangle (SPLIT_COUNT_ITEMS per invocation), the candidate scale of
+// the step at which each of its splits first fits, counted per workgroup, then added into the
+// step's histogram in `budget_state`; the workgroup that finishes last narrows the interval for
+// the next step.
 // A triangle's split count s_t grows with the scale, so its k-th split fits from the first
 // candidate j with k³ ≤ c_j·q on: the splits that fit at the step's first candidate go to bin 0,
 // each further one up to the count at the last candidate to the bin its binary search over the
 // candidates finds. The sum at candidate j is then the count of bins 0..=j.
 #include "splits_search.wgsl"
 
-const WORKGROUP: u32 = 64u;
+const WORKGROUP: u32 = 256u;
 // The binary search's first stride: the highest power of two of SPLIT_SEARCH_CANDIDATES.
 const FIRST_STRIDE: u32 = 1u << (31u - countLeadingZeros(SPLIT_SEARCH_CANDIDATES));
 
@@ -56,8 +57,8 @@ fn narrow(step: u32) {
 
 @compute @workgroup_size(WORKGROUP)
 fn main(
-    @builtin(global_invocation_id) gid: vec3<u32>,
     @builtin(local_invocation_index) lid: u32,
+    @builtin(workgroup_id) wid: vec3<u32>,
     @builtin(num_workgroups) nwg: vec3<u32>,
 ) {
     for (var b = lid; b < SPLIT_SEARCH_CANDIDATES; b += WORKGROUP) {
@@ -67,11 +68,16 @@ fn main(
         interval = search_interval(params.step);
     }
     workgroupBarrier();
-    let i = gid.x + gid.y * params.row_pitch;
-    if i < params.count {
+    let lo = interval.x;
+    let hi = interval.y;
+    // SPLIT_COUNT_ITEMS triangles per invocation, WORKGROUP apart.
+    let first = (wid.x + wid.y * nwg.x) * WORKGROUP * SPLIT_COUNT_ITEMS + lid;
+    for (var item = 0u; item < SPLIT_COUNT_ITEMS; item++) {
+        let i = first + item * WORKGROUP;
+        if i >= params.count {
+            break;
+        }
         let q = priorities[i];
-        let lo = interval.x;
-        let hi = interval.y;
         let most = splits_at(scale_at(lo, hi, SPLIT_SEARCH_CANDIDATES - 1u), q);
         if most > 0u {
             let least = splits_at(scale_at(lo, hi, 0u), q);

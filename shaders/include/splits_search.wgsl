@@ -14,6 +14,7 @@
 
 struct BudgetParams {
     count: u32,
+    // splits_assign's grid (splits_count takes its triangles by workgroup index).
     row_pitch: u32,
     budget: u32,
     // splits_count: the search step (0-based).

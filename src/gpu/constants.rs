@@ -24,6 +24,12 @@ const _: () = assert!(
     (SPLIT_SEARCH_CANDIDATES as u64 + 1).pow(SPLIT_SEARCH_STEPS) >= 1 << 32,
     "the budget search must narrow every bit pattern interval to one"
 );
+/// Triangles per invocation of a budget search step (`splits_count.wgsl`, 256 invocations per
+/// workgroup, so 1024 triangles per workgroup): each workgroup clears, fills and adds up a
+/// histogram of the candidates, which cost more than the counting itself at a triangle per
+/// invocation (lavapipe, conference: a step 8 -> 2.3 ms, the first 24 -> 16 ms). Four leave a
+/// GPU hundreds of workgroups from ~300k triangles.
+pub const SPLIT_COUNT_ITEMS: u32 = 4;
 /// Word of the budget search's state that holds the scale found: after q_max, a ticket per step,
 /// the interval after each step and each step's histogram of its candidates
 /// (`splits_search.wgsl`).
@@ -62,6 +68,7 @@ pub fn wgsl() -> String {
         u32_const("MORTON_AXIS_BITS", MORTON_AXIS_BITS),
         u32_const("MAX_SPLITS", MAX_SPLITS),
         u32_const("SPLIT_SEARCH_CANDIDATES", SPLIT_SEARCH_CANDIDATES),
+        u32_const("SPLIT_COUNT_ITEMS", SPLIT_COUNT_ITEMS),
         u32_const("SPLIT_SEARCH_STEPS", SPLIT_SEARCH_STEPS),
         u32_const("SPLIT_SCALE_WORD", SPLIT_SCALE_WORD),
         u32_const("MAX_TREELET", MAX_TREELET_SIZE),

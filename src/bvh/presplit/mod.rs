@@ -27,7 +27,7 @@ use splits_count::BudgetParams;
 use super::lbvh::{CentroidsReduce, TriangleBoundsOutput, TrianglesBounds};
 use crate::device::Geometry;
 use crate::geometry::GpuAabb;
-use crate::gpu::constants::{SPLIT_SCALE_WORD, SPLIT_SEARCH_STEPS};
+use crate::gpu::constants::{SPLIT_COUNT_ITEMS, SPLIT_SCALE_WORD, SPLIT_SEARCH_STEPS};
 use crate::gpu::{
     read_buffer, storage_buffer_zeroed, GpuContext, Items, Kernel, ParamSlab, Recorder,
 };
@@ -166,9 +166,16 @@ impl PreSplitter {
                     scene_box,
                 ],
             );
+            // SPLIT_COUNT_ITEMS triangles per invocation (the kernel reads no row pitch).
+            let count_grid = self.count_splits.grid(ctx, n.div_ceil(SPLIT_COUNT_ITEMS));
             for step in 0..SPLIT_SEARCH_STEPS {
                 budget_params.step = step;
-                pass.dispatch(&self.count_splits, grid, &budget_params, &budget_buffers);
+                pass.dispatch(
+                    &self.count_splits,
+                    count_grid,
+                    &budget_params,
+                    &budget_buffers,
+                );
             }
             pass.dispatch(&self.assign_splits, grid, &budget_params, &budget_buffers);
             self.scan

@@ -24,6 +24,6 @@ const _: () = assert!(std::mem::size_of::<BudgetParams>() == 16);
 kernel!(
     /// Per triangle: the candidate at which each of its splits first fits, counted; the last
     /// workgroup narrows the interval.
-    pub SPLITS_COUNT: BudgetParams = "splits_count"::"main", [64, 1, 1],
+    pub SPLITS_COUNT: BudgetParams = "splits_count"::"main", [256, 1, 1],
     [Read, ReadWrite, ReadWrite]
 );
