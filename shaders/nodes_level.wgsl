@@ -143,7 +143,11 @@ fn main(
         atomicStore(&costs[leaf.node], bitcast<u32>(climbing_cost));
         atomicStore(&levels[leaf.node], climbing_level);
     }
-    climb(leaf, leaf_box, has_leaf, lid);
+    // Uniform control flow (params), so the climb's barriers stay valid; the later rounds'
+    // workgroups skip them.
+    if params.levels_only == 0u {
+        climb(leaf, leaf_box, has_leaf, lid);
+    }
     // Release: the workgroup's roots are counted before the ticket is taken.
     storageBarrier();
     if lid == 0u {
