@@ -4,7 +4,8 @@
 // Morton hierarchy matter more), A_aabb the box's surface area and A_ideal = |d1×d2|₁ the area its
 // boxes approach under infinitely many splits. Keeping q (no cube root) makes the split counts
 // exact integers shared with the CPU twin. Also the largest q (atomicMax on the bits of a
-// non-negative float) for the budget search.
+// non-negative float, per workgroup, then once per workgroup into budget_state) for the budget
+// search.
 #include "bvh_node.wgsl"
 #include "aabb.wgsl"
 #include "items.wgsl"
@@ -20,31 +21,42 @@
 
 #include "split_grid.wgsl"
 
-@compute @workgroup_size(64)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x + gid.y * params.row_pitch;
-    if i >= params.count {
-        return;
-    }
-    let t = triangles[i];
+// The priority q of triangle t.
+fn priority(t: Triangle) -> f32 {
     let lo = min(t.v0, min(t.v1, t.v2));
     let hi = max(t.v0, max(t.v1, t.v2));
     let grid = split_grid();
     let cells = cell_range(grid, lo, hi);
     let bit = highest_differing_bit(cells.first, cells.last);
-    var q = 0.0;
-    if bit != NO_BIT {
-        let d1 = t.v1 - t.v0;
-        let d2 = t.v2 - t.v0;
-        let c = vec3<f32>(
-            d1.y * d2.z - d1.z * d2.y,
-            d1.z * d2.x - d1.x * d2.z,
-            d1.x * d2.y - d1.y * d2.x,
-        );
-        let ideal = abs(c.x) + abs(c.y) + abs(c.z);
-        let importance = i32(bit / 3u) - 20;
-        q = ldexp(max(box_area(lo, hi) - ideal, 0.0), importance);
+    if bit == NO_BIT {
+        return 0.0;
     }
-    priorities[i] = q;
-    atomicMax(&budget_state[0], bitcast<u32>(q));
+    let d1 = t.v1 - t.v0;
+    let d2 = t.v2 - t.v0;
+    let c = vec3<f32>(
+        d1.y * d2.z - d1.z * d2.y,
+        d1.z * d2.x - d1.x * d2.z,
+        d1.x * d2.y - d1.y * d2.x,
+    );
+    let ideal = abs(c.x) + abs(c.y) + abs(c.z);
+    let importance = i32(bit / 3u) - 20;
+    return ldexp(max(box_area(lo, hi) - ideal, 0.0), importance);
+}
+
+// The workgroup's largest q (zero-initialized, as all workgroup memory): one device atomic per
+// workgroup instead of one per triangle, all on the same word.
+var<workgroup> workgroup_max: atomic<u32>;
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let i = gid.x + gid.y * params.row_pitch;
+    if i < params.count {
+        let q = priority(triangles[i]);
+        priorities[i] = q;
+        atomicMax(&workgroup_max, bitcast<u32>(q));
+    }
+    workgroupBarrier();
+    if lid == 0u {
+        atomicMax(&budget_state[0], atomicLoad(&workgroup_max));
+    }
 }
