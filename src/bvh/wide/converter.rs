@@ -37,10 +37,18 @@ impl WideConverter {
         }
     }
 
-    /// Level dispatches for a tree of up to `prims` references: the levels where most wide
-    /// nodes lie (log8 of the leaves, and a few more for unbalanced trees).
-    pub fn level_dispatches(prims: u32) -> u32 {
-        (prims.max(1).ilog2() / 3 + 4).min(MAX_WIDE_LEVEL_DISPATCHES)
+    /// Level dispatches for a tree of up to `prims` references on a device of this type: on a
+    /// GPU the levels where most wide nodes lie (log8 of the leaves, and a few more for
+    /// unbalanced trees), the narrow tail left to one workgroup; on a CPU device, where that
+    /// workgroup is one thread, 4 levels more (lavapipe, trbvh trees, the stage in three
+    /// alternating runs: conference 47-48 -> 36-39 ms, crytek_sponza 30-33 -> 28-29 ms,
+    /// lost_empire unchanged).
+    pub fn level_dispatches(prims: u32, device: wgpu::DeviceType) -> u32 {
+        let extra = match device {
+            wgpu::DeviceType::Cpu => 8,
+            _ => 4,
+        };
+        (prims.max(1).ilog2() / 3 + extra).min(MAX_WIDE_LEVEL_DISPATCHES)
     }
 
     /// Fixes the number of level dispatches (tests: every schedule gives the same tree); `None`
@@ -59,7 +67,7 @@ impl WideConverter {
         let capacity = max_wide_nodes(binary_nodes.div_ceil(2));
         let level_dispatches = self
             .forced_level_dispatches
-            .unwrap_or_else(|| Self::level_dispatches(prims));
+            .unwrap_or_else(|| Self::level_dispatches(prims, ctx.info.device_type));
         let record_bytes = u64::from(RECORD_WORDS * (MAX_WIDE_LEVEL_DISPATCHES + 2)) * 4;
         let fits = tree.wide.as_ref().is_some_and(|w| {
             w.capacity >= capacity && w.prim_indices.size() >= u64::from(prims) * 4
