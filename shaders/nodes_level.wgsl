@@ -72,6 +72,42 @@ fn bucket(node: u32, level: u32) {
     }
 }
 
+// The roots of each bucketed level this workgroup found (later rounds), and where its slots
+// start in the level's bucket.
+var<workgroup> workgroup_roots: array<atomic<u32>, MAX_LEVEL_DISPATCHES + 1u>;
+var<workgroup> workgroup_slots: array<u32, MAX_LEVEL_DISPATCHES + 1u>;
+
+// A later round's schedule: internal node j (if it is one) zeroes its arrival word and, if it
+// roots a treelet of a bucketed level, takes a slot in that level's bucket. The workgroup counts
+// its roots per level and reserves their slots with one device atomic per level, not one per root
+// on the same word. Call from uniform control flow.
+fn bucket_workgroup_roots(j: u32, n: u32, lid: u32) {
+    var level = 0u;
+    var rank = 0u;
+    if j + 1u < n {
+        atomicStore(&arrivals[j], 0u);
+        if is_root(j) {
+            level = atomicLoad(&levels[j]);
+            if level <= params.level_dispatches + 1u {
+                rank = atomicAdd(&workgroup_roots[level - 1u], 1u);
+            } else {
+                level = 0u;
+            }
+        }
+    }
+    workgroupBarrier();
+    for (var l = lid; l <= params.level_dispatches; l += WORKGROUP_WIDTH) {
+        let count = atomicLoad(&workgroup_roots[l]);
+        if count != 0u {
+            workgroup_slots[l] = atomicAdd(&schedule[l], count);
+        }
+    }
+    workgroupBarrier();
+    if level != 0u {
+        roots[level_start(level) + workgroup_slots[level - 1u] + rank] = j;
+    }
+}
+
 // The last workgroup: each dispatched level's indirect arguments, from its root count.
 fn write_dispatch_args() {
     for (var level = 1u; level <= params.level_dispatches; level++) {
@@ -127,12 +163,7 @@ fn main(
     let has_leaf = params.levels_only == 0u && j < n;
     if params.levels_only != 0u {
         // Invocation j: internal node j, whose level the round before computed; no climb.
-        if j + 1u < n {
-            atomicStore(&arrivals[j], 0u);
-            if is_root(j) {
-                bucket(j, atomicLoad(&levels[j]));
-            }
-        }
+        bucket_workgroup_roots(j, n, lid);
     } else if has_leaf {
         leaf_box = prim_boxes[order[j]];
         leaf = emit_leaf(j, leaf_box);
