@@ -18,8 +18,9 @@
 // its primitive, each internal node's from its children. After the first round (levels_only),
 // boxes, counts, costs and the roots' levels of the new gamma are those the treelet kernels of
 // the round before left (treelet_dp.wgsl, step 5): one invocation per internal node only buckets
-// the roots, without a climb, and zeroes the node's arrival counter for treelets_climb.wgsl (the
-// first round's climb leaves every arrival word zero).
+// the roots, without a climb (its workgroup reserving the slots of its roots with one atomic per
+// level), and zeroes the node's arrival counter for treelets_climb.wgsl (the first round's climb
+// leaves every arrival word zero).
 // The node data this climb writes is shared across workgroups, so it all goes through atomics
 // (node words, node_words.wgsl), ordered around the arrivals by radix_climb.wgsl's `climb`, which
 // calls `finish_parent` below for each parent.
