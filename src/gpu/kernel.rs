@@ -110,7 +110,7 @@ pub(crate) struct CompiledKernel {
 }
 
 /// Values of a kernel's pipeline-overridable constants (WGSL `override`), by name.
-pub type Overrides = &'static [(&'static str, f64)];
+pub type Overrides<'a> = &'a [(&'static str, f64)];
 
 /// The constant that sets a kernel's workgroup width where its WGSL declares
 /// `override WORKGROUP_WIDTH: u32 = <the declaration's width>;` and
@@ -120,16 +120,6 @@ pub const WORKGROUP_WIDTH_OVERRIDE: &str = "WORKGROUP_WIDTH";
 
 /// Workgroup widths the bottom-up climbs can run with (`GpuOptions::climb_width`).
 pub const CLIMB_WIDTHS: [u32; 6] = [8, 16, 32, 64, 128, 256];
-
-/// The overrides of each of `CLIMB_WIDTHS` (`Kernel::climb`).
-const CLIMB_WIDTH_OVERRIDES: [Overrides; CLIMB_WIDTHS.len()] = [
-    &[(WORKGROUP_WIDTH_OVERRIDE, 8.0)],
-    &[(WORKGROUP_WIDTH_OVERRIDE, 16.0)],
-    &[(WORKGROUP_WIDTH_OVERRIDE, 32.0)],
-    &[(WORKGROUP_WIDTH_OVERRIDE, 64.0)],
-    &[(WORKGROUP_WIDTH_OVERRIDE, 128.0)],
-    &[(WORKGROUP_WIDTH_OVERRIDE, 256.0)],
-];
 
 /// `width` if it is one of `CLIMB_WIDTHS`, else a clear error.
 pub fn check_climb_width(width: u32) -> Result<u32> {
@@ -234,11 +224,11 @@ impl<P: Pod> Kernel<P> {
     /// `ctx.climb_width()`; at the declared width it is the plain kernel.
     pub fn climb(ctx: &GpuContext, decl: &'static KernelDecl<P>) -> Self {
         let width = ctx.climb_width();
-        let overrides = CLIMB_WIDTHS
-            .iter()
-            .position(|&w| w == width && w != decl.info.workgroup_size[0])
-            .map_or(&[][..], |i| CLIMB_WIDTH_OVERRIDES[i]);
-        Self::with_overrides(ctx, decl, overrides)
+        if width == decl.info.workgroup_size[0] {
+            Self::new(ctx, decl)
+        } else {
+            Self::with_overrides(ctx, decl, &[(WORKGROUP_WIDTH_OVERRIDE, f64::from(width))])
+        }
     }
 
     /// The grid that covers `items` invocations along x (2D past the per-dimension limit).

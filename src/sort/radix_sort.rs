@@ -40,7 +40,7 @@ use super::keys_scatter::KEYS_SCATTER;
 pub use crate::gpu::constants::RADIX_BITS;
 use crate::gpu::{
     read_buffer, storage_buffer, storage_buffer_zeroed, GpuContext, Grid, ItemCount, Kernel,
-    Overrides, ParamSlab, Recorder,
+    ParamSlab, Recorder,
 };
 use crate::{Error, Result};
 
@@ -155,18 +155,16 @@ impl TileKernels {
     /// The kernels of tile size `SORT_TILE_ITEMS[variant]`.
     fn new(ctx: &GpuContext, variant: usize) -> Self {
         Self {
-            histogram: Kernel::with_overrides(ctx, &KEYS_HISTOGRAM, TILE_OVERRIDES[variant]),
-            scatter: Kernel::with_overrides(ctx, &KEYS_SCATTER, TILE_OVERRIDES[variant]),
+            histogram: Kernel::with_overrides(ctx, &KEYS_HISTOGRAM, &tile_override(variant)),
+            scatter: Kernel::with_overrides(ctx, &KEYS_SCATTER, &tile_override(variant)),
         }
     }
 }
 
-/// The override values of each tile size, in the order of `SORT_TILE_ITEMS`.
-const TILE_OVERRIDES: [Overrides; 3] = [
-    &[("TILE_ITEMS", 8.0)],
-    &[("TILE_ITEMS", 16.0)],
-    &[("TILE_ITEMS", 32.0)],
-];
+/// The override of tile size `SORT_TILE_ITEMS[variant]`.
+fn tile_override(variant: usize) -> [(&'static str, f64); 1] {
+    [("TILE_ITEMS", f64::from(SORT_TILE_ITEMS[variant]))]
+}
 
 /// The GPU radix sort: kernels created per tile size when first used, scratch buffers grown on
 /// demand.

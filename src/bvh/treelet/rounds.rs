@@ -31,7 +31,7 @@ use super::treelets_climb::TREELETS_CLIMB;
 use super::treelets_optimize::TREELETS_OPTIMIZE;
 use crate::gpu::constants::{MAX_LEVEL_DISPATCHES, MAX_TREELET_SIZE, MIN_TREELET_SIZE};
 use crate::gpu::{
-    storage_buffer, storage_buffer_zeroed, GpuContext, Grid, ItemCount, Kernel, Overrides, Recorder,
+    storage_buffer, storage_buffer_zeroed, GpuContext, Grid, ItemCount, Kernel, Recorder,
 };
 use crate::Result;
 
@@ -161,17 +161,8 @@ fn default_team_below(device: wgpu::DeviceType) -> u32 {
     }
 }
 
-/// The override values of each treelet size, MIN_TREELET_SIZE..=MAX_TREELET_SIZE.
-const TREELET_SIZE_OVERRIDES: [Overrides; 6] = [
-    &[(TREELET_SIZE_OVERRIDE, 3.0)],
-    &[(TREELET_SIZE_OVERRIDE, 4.0)],
-    &[(TREELET_SIZE_OVERRIDE, 5.0)],
-    &[(TREELET_SIZE_OVERRIDE, 6.0)],
-    &[(TREELET_SIZE_OVERRIDE, 7.0)],
-    &[(TREELET_SIZE_OVERRIDE, 8.0)],
-];
-const _: () =
-    assert!(TREELET_SIZE_OVERRIDES.len() == (MAX_TREELET_SIZE - MIN_TREELET_SIZE + 1) as usize);
+/// Treelet sizes with kernels of their own, MIN_TREELET_SIZE..=MAX_TREELET_SIZE.
+const TREELET_SIZES: usize = (MAX_TREELET_SIZE - MIN_TREELET_SIZE + 1) as usize;
 
 /// The treelet kernels of one treelet size (the WGSL override `TREELET_SIZE`, which selects the
 /// written-out DP of that size: `dp_unrolled`).
@@ -182,7 +173,7 @@ struct TreeletKernels {
 
 impl TreeletKernels {
     fn new(ctx: &GpuContext, treelet_size: u32) -> Self {
-        let overrides = TREELET_SIZE_OVERRIDES[(treelet_size - MIN_TREELET_SIZE) as usize];
+        let overrides = &[(TREELET_SIZE_OVERRIDE, f64::from(treelet_size))];
         Self {
             optimize: Kernel::with_overrides(ctx, &TREELETS_OPTIMIZE, overrides),
             climb: Kernel::with_overrides(ctx, &TREELETS_CLIMB, overrides),
@@ -198,7 +189,7 @@ pub(crate) struct TreeletRounds {
     climb_level: Kernel<RoundParams>,
     level: Kernel<RoundParams>,
     /// Per treelet size from MIN_TREELET_SIZE, compiled when first used.
-    treelet_kernels: [OnceLock<TreeletKernels>; TREELET_SIZE_OVERRIDES.len()],
+    treelet_kernels: [OnceLock<TreeletKernels>; TREELET_SIZES],
     /// `subsets_by_size`, read by the teams.
     subsets: wgpu::Buffer,
     /// The roots of the dispatched levels and the first climbed one, each level in its slots
