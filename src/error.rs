@@ -32,3 +32,14 @@ pub enum Error {
 }
 
 pub type Result<T> = std::result::Result<T, Error>;
+
+/// `value` if it is one of `allowed`, else a clear error naming `what`.
+pub(crate) fn one_of(what: &str, value: u32, allowed: &[u32]) -> Result<u32> {
+    if allowed.contains(&value) {
+        Ok(value)
+    } else {
+        Err(Error::InvalidArgument(format!(
+            "{what} must be one of {allowed:?}, got {value}"
+        )))
+    }
+}

@@ -14,7 +14,7 @@ use std::sync::Mutex;
 use bytemuck::Pod;
 
 use super::{shader_source, GpuContext};
-use crate::{Error, Result};
+use crate::Result;
 
 /// What binding `b` of a kernel's bind group 0 holds (`slots[b]`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -123,13 +123,7 @@ pub const CLIMB_WIDTHS: [u32; 6] = [8, 16, 32, 64, 128, 256];
 
 /// `width` if it is one of `CLIMB_WIDTHS`, else a clear error.
 pub fn check_climb_width(width: u32) -> Result<u32> {
-    if CLIMB_WIDTHS.contains(&width) {
-        Ok(width)
-    } else {
-        Err(Error::InvalidArgument(format!(
-            "climb width must be one of {CLIMB_WIDTHS:?}, got {width}"
-        )))
-    }
+    crate::error::one_of("climb width", width, &CLIMB_WIDTHS)
 }
 
 /// The climb width on a device of this type: 64 on GPUs (two warps; a barrier is cheap there);

@@ -59,13 +59,7 @@ pub const SORT_TILE_ITEMS: [u32; 3] = [8, 16, 32];
 /// of 2048 cost lavapipe's sort about half again).
 /// `items` if it is one of `SORT_TILE_ITEMS`, else a clear error.
 pub fn check_tile_items(items: u32) -> Result<u32> {
-    if SORT_TILE_ITEMS.contains(&items) {
-        Ok(items)
-    } else {
-        Err(Error::InvalidArgument(format!(
-            "sort tile items must be one of {SORT_TILE_ITEMS:?}, got {items}"
-        )))
-    }
+    crate::error::one_of("sort tile items", items, &SORT_TILE_ITEMS)
 }
 
 pub fn tile_items(len: u32, device: wgpu::DeviceType) -> u32 {
