@@ -25,8 +25,7 @@ fn add_to_box_words(lid: u32, lo: vec3<f32>, hi: vec3<f32>) {
     workgroupBarrier();
     // Two barriers, not one per halving step (a barrier is what a workgroup pays most for on a
     // CPU device): GROUPS invocations each reduce a group of GROUPS boxes, then invocation 0 the
-    // groups' boxes. Min and max are exact: the order
-    // changes at most the sign of a zero.
+    // groups' boxes. Min and max are exact: the order changes at most the sign of a zero.
     if lid < GROUPS {
         for (var k = 1u; k < GROUPS; k++) {
             shared_min[lid * GROUPS] = min(shared_min[lid * GROUPS], shared_min[lid * GROUPS + k]);
