@@ -3,7 +3,8 @@
 // between, the levels below it up to top = min(START_LEVELS, level_dispatches): at most 8 and 64
 // wide nodes, one wave of the workgroup each, so these levels cost no dispatch of their own.
 // Level L > top (an indirect dispatch of the size level L − 1 wrote) emits the wide nodes
-// [first, end) of its record, each invocation striding over them. The last level of a dispatch
+// [first, end) of its record, each workgroup striding over them a wave at a time (one device
+// atomic per wave and counter allocates the wave's children and references). The last level of a dispatch
 // writes the record of the next: first = end of this level (the children allocated here follow
 // it), end = the largest end of those children, and max(1, ceil((end − first) / 64)) workgroups
 // (capped; the invocations stride), so every level dispatch runs and passes `first` on even
@@ -29,9 +30,19 @@ fn open_next_level(level: u32, first: u32) {
 const START_LEVELS: u32 = 2u;
 
 var<workgroup> start_end: u32;
+// A level dispatch's wave: its nodes' internal children and references so far, then where they
+// start (child node, reference).
+var<workgroup> wave_children: atomic<u32>;
+var<workgroup> wave_prims: atomic<u32>;
+var<workgroup> wave_bases: vec2<u32>;
 
 @compute @workgroup_size(64)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32, @builtin(num_workgroups) groups: vec3<u32>) {
+fn main(
+    @builtin(global_invocation_id) gid: vec3<u32>,
+    @builtin(local_invocation_index) lid: u32,
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+) {
     if params.level == 0u {
         let top = min(START_LEVELS, params.level_dispatches);
         if lid == 0u {
@@ -66,12 +77,43 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
     if gid.x == 0u {
         open_next_level(params.level, end);
     }
+    // The workgroup strides over the level's nodes a wave at a time, and allocates each wave's
+    // children and references together: one device atomic per counter, not one per node.
     let stride = groups.x * EMIT_WORKGROUP;
-    for (var w = first + gid.x; w < end; w += stride) {
-        var base = 0u;
-        let children = emit_wide_node(w, wide_sources[w], &base);
-        if children > 0u {
-            size_next_level(params.level, end, base + children);
+    for (var wave = first + wid.x * EMIT_WORKGROUP; wave < end; wave += stride) {
+        let w = wave + lid;
+        var draft: WideDraft;
+        var child_offset = 0u;
+        var prim_offset = 0u;
+        if w < end {
+            draft = draft_wide_node(wide_sources[w]);
+            child_offset = atomicAdd(&wave_children, draft.internal);
+            prim_offset = atomicAdd(&wave_prims, draft.prims);
+        }
+        workgroupBarrier();
+        if lid == 0u {
+            let children = atomicExchange(&wave_children, 0u);
+            let prims = atomicExchange(&wave_prims, 0u);
+            var bases = vec2<u32>(0u);
+            if children > 0u {
+                bases.x = atomicAdd(&wide_counters[0], children);
+            }
+            if prims > 0u {
+                bases.y = atomicAdd(&wide_counters[1], prims);
+            }
+            wave_bases = bases;
+        }
+        let bases = workgroupUniformLoad(&wave_bases);
+        if w < end {
+            let child_base = bases.x + child_offset;
+            if child_base + draft.internal > params.capacity {
+                atomicAdd(&wide_counters[2], 1u);
+            } else {
+                commit_wide_node(w, draft, bases.y + prim_offset, child_base);
+                if draft.internal > 0u {
+                    size_next_level(params.level, end, child_base + draft.internal);
+                }
+            }
         }
     }
 }

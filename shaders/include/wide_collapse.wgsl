@@ -12,7 +12,8 @@
 //    arithmetic; the products are exact, so fused or not every device rounds alike).
 // 4. Output: internal children get consecutive wide nodes from an atomic counter (their sources
 //    are written for the next level), leaf children's references are copied to consecutive
-//    entries of `wide_prims`.
+//    entries of `wide_prims`. A level dispatch's workgroup allocates for all its nodes at once
+//    (wide_nodes_emit.wgsl): one device atomic per counter and workgroup, not per node.
 // Every decision uses additions, exact products or `unfused` ones: the tree is the same on every
 // device, up to the numbering of nodes and reference blocks (allocation order).
 #include "bvh_node.wgsl"
@@ -88,9 +89,18 @@ fn with_byte(bytes: vec2<u32>, slot: u32, value: u32) -> vec2<u32> {
     return bytes | select(vec2<u32>(shifted, 0u), vec2<u32>(0u, shifted), slot >= 4u);
 }
 
-// Writes wide node `w` from binary node `source`; returns how many internal children it
-// allocated (their sources written) after `*base`.
-fn emit_wide_node(w: u32, source: u32, base: ptr<function, u32>) -> u32 {
+// A wide node before its children and references are allocated: the node (child_base and
+// prim_base 0), its internal children and references, and per slot the binary child's index
+// (internal) or first reference (leaf).
+struct WideDraft {
+    node: WideNode,
+    internal: u32,
+    prims: u32,
+    slot_words: array<u32, 8>,
+}
+
+// The wide node made from binary node `source` (steps 1-3).
+fn draft_wide_node(source: u32) -> WideDraft {
     var child: array<BvhNode, 8>;
     var child_index: array<u32, 8>;
     var count = 0u;
@@ -203,39 +213,59 @@ fn emit_wide_node(w: u32, source: u32, base: ptr<function, u32>) -> u32 {
         }
     }
     out.exponents = e.x | (e.y << 8u) | (e.z << 16u) | (imask << 24u);
-    out.prim_base = 0u;
-    if prims > 0u {
-        out.prim_base = atomicAdd(&wide_counters[1], prims);
-    }
-    out.child_base = 0u;
-    if internal > 0u {
-        out.child_base = atomicAdd(&wide_counters[0], internal);
-        if out.child_base + internal > params.capacity {
-            atomicAdd(&wide_counters[2], 1u);
-            return 0u;
-        }
-    }
-    var next_prim = out.prim_base;
-    var next_child = out.child_base;
+    var slot_words: array<u32, 8>;
     for (var s = 0u; s < 8u; s++) {
         let j = in_slot[s];
-        if j == 8u {
-            continue;
+        if j != 8u {
+            slot_words[s] = select(child_index[j], child[j].left_or_first, (child[j].right_or_count & LEAF_FLAG) != 0u);
         }
-        let c = child[j];
-        if (c.right_or_count & LEAF_FLAG) != 0u {
-            let first = c.left_or_first;
-            let n = c.right_or_count & ~LEAF_FLAG;
+    }
+    return WideDraft(out, internal, prims, slot_words);
+}
+
+// Writes `draft` as wide node `w`, its internal children's sources from `child_base` and its
+// leaves' references from `prim_base`, both in slot order (step 4).
+fn commit_wide_node(w: u32, draft: WideDraft, prim_base: u32, child_base: u32) {
+    var out = draft.node;
+    out.prim_base = select(0u, prim_base, draft.prims > 0u);
+    out.child_base = select(0u, child_base, draft.internal > 0u);
+    let imask = out.exponents >> 24u;
+    var next_prim = prim_base;
+    var next_child = child_base;
+    for (var s = 0u; s < 8u; s++) {
+        if ((imask >> s) & 1u) != 0u {
+            wide_sources[next_child] = draft.slot_words[s];
+            next_child++;
+        } else {
+            let first = draft.slot_words[s];
+            let n = slot_byte(out.leaf_counts, s);
             for (var i = 0u; i < n; i++) {
                 wide_prims[next_prim + i] = prim_indices[first + i];
             }
             next_prim += n;
-        } else {
-            wide_sources[next_child] = child_index[j];
-            next_child++;
         }
     }
     wide_nodes[w] = out;
-    *base = out.child_base;
-    return internal;
+}
+
+// Writes wide node `w` from binary node `source`, its children and references allocated with
+// a device atomic each; returns how many internal children it allocated (their sources written)
+// after `*base`.
+fn emit_wide_node(w: u32, source: u32, base: ptr<function, u32>) -> u32 {
+    let draft = draft_wide_node(source);
+    var prim_base = 0u;
+    if draft.prims > 0u {
+        prim_base = atomicAdd(&wide_counters[1], draft.prims);
+    }
+    var child_base = 0u;
+    if draft.internal > 0u {
+        child_base = atomicAdd(&wide_counters[0], draft.internal);
+        if child_base + draft.internal > params.capacity {
+            atomicAdd(&wide_counters[2], 1u);
+            return 0u;
+        }
+    }
+    commit_wide_node(w, draft, prim_base, child_base);
+    *base = child_base;
+    return draft.internal;
 }
