@@ -8,7 +8,8 @@
 // levels below (treelets_optimize.wgsl, treelets_climb.wgsl). Costs of nodes below gamma are
 // final here; a root's cost is recomputed when its level is processed. The roots of each level
 // up to level_dispatches + 1 go into that level's bucket as they are found (treelet_round.wgsl:
-// a counter per level in the schedule buffer, the level's slots of `roots`), and the workgroup
+// a counter per level in the schedule buffer, the level's slots of `roots`; a workgroup reserves
+// the slots of the roots it found together, one atomic per level), and the workgroup
 // that finishes last (a ticket in the schedule buffer; no workgroup waits for another) writes
 // each dispatched level's indirect arguments from the final counts: a workgroup per treelet
 // below params.team_below treelets, else per 32 treelets (treelets_optimize.wgsl).
@@ -18,9 +19,8 @@
 // its primitive, each internal node's from its children. After the first round (levels_only),
 // boxes, counts, costs and the roots' levels of the new gamma are those the treelet kernels of
 // the round before left (treelet_dp.wgsl, step 5): one invocation per internal node only buckets
-// the roots, without a climb (its workgroup reserving the slots of its roots with one atomic per
-// level), and zeroes the node's arrival counter for treelets_climb.wgsl (the first round's climb
-// leaves every arrival word zero).
+// the roots, without a climb, and zeroes the node's arrival counter for treelets_climb.wgsl (the
+// first round's climb leaves every arrival word zero).
 // The node data this climb writes is shared across workgroups, so it all goes through atomics
 // (node words, node_words.wgsl), ordered around the arrivals by radix_climb.wgsl's `climb`, which
 // calls `finish_parent` below for each parent.
@@ -66,36 +66,14 @@ fn child_level(child: u32) -> u32 {
     return select(0u, atomicLoad(&levels[child]), is_root(child));
 }
 
-// Adds the root `node` of level `level` (>= 1) to its level's bucket, if its level is bucketed.
-fn bucket(node: u32, level: u32) {
-    if level <= params.level_dispatches + 1u {
-        roots[level_start(level) + atomicAdd(&schedule[level - 1u], 1u)] = node;
-    }
-}
-
-// The roots of each bucketed level this workgroup found (later rounds), and where its slots
-// start in the level's bucket.
+// The roots of each bucketed level this workgroup found (in the first round's climb, or in a
+// later round's pass), and where their slots start in the level's bucket.
 var<workgroup> workgroup_roots: array<atomic<u32>, MAX_LEVEL_DISPATCHES + 1u>;
 var<workgroup> workgroup_slots: array<u32, MAX_LEVEL_DISPATCHES + 1u>;
 
-// A later round's schedule: internal node j (if it is one) zeroes its arrival word and, if it
-// roots a treelet of a bucketed level, takes a slot in that level's bucket. The workgroup counts
-// its roots per level and reserves their slots with one device atomic per level, not one per root
-// on the same word. Call from uniform control flow.
-fn bucket_workgroup_roots(j: u32, n: u32, lid: u32) {
-    var level = 0u;
-    var rank = 0u;
-    if j + 1u < n {
-        atomicStore(&arrivals[j], 0u);
-        if is_root(j) {
-            level = atomicLoad(&levels[j]);
-            if level <= params.level_dispatches + 1u {
-                rank = atomicAdd(&workgroup_roots[level - 1u], 1u);
-            } else {
-                level = 0u;
-            }
-        }
-    }
+// Once the workgroup has counted its roots per level: reserves their slots, one device atomic
+// per level (between two barriers).
+fn reserve_workgroup_slots(lid: u32) {
     workgroupBarrier();
     for (var l = lid; l <= params.level_dispatches; l += WORKGROUP_WIDTH) {
         let count = atomicLoad(&workgroup_roots[l]);
@@ -104,9 +82,85 @@ fn bucket_workgroup_roots(j: u32, n: u32, lid: u32) {
         }
     }
     workgroupBarrier();
-    if level != 0u {
-        roots[level_start(level) + workgroup_slots[level - 1u] + rank] = j;
+}
+
+// Puts the root `node` of level `level` (0: no root here) into its level's bucket, if that level
+// is bucketed: the workgroup counts its roots per level and reserves their slots with one device
+// atomic per level, not one per root on the level's word (which a GPU serializes). Every
+// invocation of the workgroup calls it (uniform control flow).
+fn bucket_together(node: u32, level: u32, lid: u32) {
+    let bucketed = level != 0u && level <= params.level_dispatches + 1u;
+    var rank = 0u;
+    if bucketed {
+        rank = atomicAdd(&workgroup_roots[level - 1u], 1u);
     }
+    reserve_workgroup_slots(lid);
+    if bucketed {
+        roots[level_start(level) + workgroup_slots[level - 1u] + rank] = node;
+    }
+}
+
+// The first round's roots of bucketed levels, queued by the workgroup during its climb (node,
+// level, rank in the level) and bucketed together after it; a root past the queue's room is
+// bucketed on its own (`bucket`). A workgroup finishes about one node per invocation, plus the
+// climbs above its leaves: a queue of two per invocation holds most of a workgroup's roots (the
+// rest, from the long climbs near the top, take an atomic each; CPU devices' 8-wide workgroups
+// use both paths).
+override ROOT_QUEUE: u32 = 2u * WORKGROUP_WIDTH;
+var<workgroup> root_queue: array<vec3<u32>, ROOT_QUEUE>;
+var<workgroup> queued_roots: atomic<u32>;
+var<workgroup> queue_length: u32;
+
+// Adds the root `node` of level `level` (>= 1) to its level's bucket, if its level is bucketed,
+// with a device atomic of its own.
+fn bucket(node: u32, level: u32) {
+    if level <= params.level_dispatches + 1u {
+        roots[level_start(level) + atomicAdd(&schedule[level - 1u], 1u)] = node;
+    }
+}
+
+// Queues the root `node` of level `level` (>= 1) for `bucket_queue`, if its level is bucketed.
+fn queue_root(node: u32, level: u32) {
+    if level > params.level_dispatches + 1u {
+        return;
+    }
+    let at = atomicAdd(&queued_roots, 1u);
+    if at < ROOT_QUEUE {
+        root_queue[at] = vec3<u32>(node, level, 0u);
+    } else {
+        bucket(node, level);
+    }
+}
+
+// After the climb: the queued roots into their buckets, one device atomic per level for the
+// workgroup. Call from uniform control flow.
+fn bucket_queue(lid: u32) {
+    workgroupBarrier();
+    if lid == 0u {
+        queue_length = min(atomicLoad(&queued_roots), ROOT_QUEUE);
+    }
+    let length = workgroupUniformLoad(&queue_length);
+    for (var i = lid; i < length; i += WORKGROUP_WIDTH) {
+        root_queue[i].z = atomicAdd(&workgroup_roots[root_queue[i].y - 1u], 1u);
+    }
+    reserve_workgroup_slots(lid);
+    for (var i = lid; i < length; i += WORKGROUP_WIDTH) {
+        let root = root_queue[i];
+        roots[level_start(root.y) + workgroup_slots[root.y - 1u] + root.z] = root.x;
+    }
+}
+
+// A later round's schedule: internal node j (if it is one) zeroes its arrival word and buckets
+// itself if it roots a treelet. Call from uniform control flow.
+fn bucket_internal_node(j: u32, n: u32, lid: u32) {
+    var level = 0u;
+    if j + 1u < n {
+        atomicStore(&arrivals[j], 0u);
+        if is_root(j) {
+            level = atomicLoad(&levels[j]);
+        }
+    }
+    bucket_together(j, level, lid);
 }
 
 // The last workgroup: each dispatched level's indirect arguments, from its root count.
@@ -142,7 +196,7 @@ fn finish_parent(p: EmittedParent) {
     if prims >= params.gamma {
         let own_level = select(0u, climbing_level, climbing_prims >= params.gamma);
         level = max(own_level, child_level(other)) + 1u;
-        bucket(node, level);
+        queue_root(node, level);
     }
     atomicStore(&levels[node], level);
     climbing_prims = prims;
@@ -164,7 +218,7 @@ fn main(
     let has_leaf = params.levels_only == 0u && j < n;
     if params.levels_only != 0u {
         // Invocation j: internal node j, whose level the round before computed; no climb.
-        bucket_workgroup_roots(j, n, lid);
+        bucket_internal_node(j, n, lid);
     } else if has_leaf {
         leaf_box = prim_boxes[order[j]];
         leaf = emit_leaf(j, leaf_box);
@@ -179,6 +233,7 @@ fn main(
     // workgroups skip them.
     if params.levels_only == 0u {
         climb(leaf, leaf_box, has_leaf, lid);
+        bucket_queue(lid);
     }
     // Release: the workgroup's roots are counted before the ticket is taken.
     storageBarrier();
