@@ -3,7 +3,7 @@
 // between, the levels below it up to top = min(START_LEVELS, level_dispatches): at most 8 and 64
 // wide nodes, one wave of the workgroup each, so these levels cost no dispatch of their own.
 // Level L > top (an indirect dispatch of the size level L − 1 wrote) emits the wide nodes
-// [first, end) of its record, each workgroup striding over them a wave at a time (one device
+// [first, end) of its record, the workgroups striding over them a wave at a time (one device
 // atomic per wave and counter allocates the wave's children and references). The last level of a dispatch
 // writes the record of the next: first = end of this level (the children allocated here follow
 // it), end = the largest end of those children, and max(1, ceil((end − first) / 64)) workgroups
@@ -30,11 +30,6 @@ fn open_next_level(level: u32, first: u32) {
 const START_LEVELS: u32 = 2u;
 
 var<workgroup> start_end: u32;
-// A level dispatch's wave: its nodes' internal children and references so far, then where they
-// start (child node, reference).
-var<workgroup> wave_children: atomic<u32>;
-var<workgroup> wave_prims: atomic<u32>;
-var<workgroup> wave_bases: vec2<u32>;
 
 @compute @workgroup_size(64)
 fn main(
@@ -54,11 +49,10 @@ fn main(
             if level == top && lid == 0u {
                 open_next_level(top, end);
             }
-            for (var w = first + lid; w < end; w += EMIT_WORKGROUP) {
-                var base = 0u;
-                let children = emit_wide_node(w, select(wide_sources[w], 0u, w == 0u), &base);
-                if level == top && children > 0u {
-                    size_next_level(top, end, base + children);
+            for (var wave = first; wave < end; wave += EMIT_WORKGROUP) {
+                let children_end = emit_wave_node(wave + lid, end, lid);
+                if level == top && children_end > 0u {
+                    size_next_level(top, end, children_end);
                 }
             }
             // This level's sources are stored before the next level reads them.
@@ -77,43 +71,12 @@ fn main(
     if gid.x == 0u {
         open_next_level(params.level, end);
     }
-    // The workgroup strides over the level's nodes a wave at a time, and allocates each wave's
-    // children and references together: one device atomic per counter, not one per node.
+    // The workgroups stride over the level's nodes a wave at a time.
     let stride = groups.x * EMIT_WORKGROUP;
     for (var wave = first + wid.x * EMIT_WORKGROUP; wave < end; wave += stride) {
-        let w = wave + lid;
-        var draft: WideDraft;
-        var child_offset = 0u;
-        var prim_offset = 0u;
-        if w < end {
-            draft = draft_wide_node(wide_sources[w]);
-            child_offset = atomicAdd(&wave_children, draft.internal);
-            prim_offset = atomicAdd(&wave_prims, draft.prims);
-        }
-        workgroupBarrier();
-        if lid == 0u {
-            let children = atomicExchange(&wave_children, 0u);
-            let prims = atomicExchange(&wave_prims, 0u);
-            var bases = vec2<u32>(0u);
-            if children > 0u {
-                bases.x = atomicAdd(&wide_counters[0], children);
-            }
-            if prims > 0u {
-                bases.y = atomicAdd(&wide_counters[1], prims);
-            }
-            wave_bases = bases;
-        }
-        let bases = workgroupUniformLoad(&wave_bases);
-        if w < end {
-            let child_base = bases.x + child_offset;
-            if child_base + draft.internal > params.capacity {
-                atomicAdd(&wide_counters[2], 1u);
-            } else {
-                commit_wide_node(w, draft, bases.y + prim_offset, child_base);
-                if draft.internal > 0u {
-                    size_next_level(params.level, end, child_base + draft.internal);
-                }
-            }
+        let children_end = emit_wave_node(wave + lid, end, lid);
+        if children_end > 0u {
+            size_next_level(params.level, end, children_end);
         }
     }
 }

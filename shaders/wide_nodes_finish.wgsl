@@ -22,9 +22,8 @@ fn main(@builtin(local_invocation_index) lid: u32) {
         if first >= end {
             break;
         }
-        for (var w = first + lid; w < end; w += FINISH_WORKGROUP) {
-            var base = 0u;
-            emit_wide_node(w, wide_sources[w], &base);
+        for (var wave = first; wave < end; wave += FINISH_WORKGROUP) {
+            emit_wave_node(wave + lid, end, lid);
         }
         storageBarrier();
         first = end;

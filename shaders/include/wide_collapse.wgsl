@@ -12,8 +12,8 @@
 //    arithmetic; the products are exact, so fused or not every device rounds alike).
 // 4. Output: internal children get consecutive wide nodes from an atomic counter (their sources
 //    are written for the next level), leaf children's references are copied to consecutive
-//    entries of `wide_prims`. A level dispatch's workgroup allocates for all its nodes at once
-//    (wide_nodes_emit.wgsl): one device atomic per counter and workgroup, not per node.
+//    entries of `wide_prims`. A workgroup emits its nodes in waves and allocates for a wave at
+//    once (`emit_wave_node`): one device atomic per counter and wave, not per node.
 // Every decision uses additions, exact products or `unfused` ones: the tree is the same on every
 // device, up to the numbering of nodes and reference blocks (allocation order).
 #include "bvh_node.wgsl"
@@ -248,24 +248,48 @@ fn commit_wide_node(w: u32, draft: WideDraft, prim_base: u32, child_base: u32) {
     wide_nodes[w] = out;
 }
 
-// Writes wide node `w` from binary node `source`, its children and references allocated with
-// a device atomic each; returns how many internal children it allocated (their sources written)
-// after `*base`.
-fn emit_wide_node(w: u32, source: u32, base: ptr<function, u32>) -> u32 {
-    let draft = draft_wide_node(source);
-    var prim_base = 0u;
-    if draft.prims > 0u {
-        prim_base = atomicAdd(&wide_counters[1], draft.prims);
+// A wave's allocation: its nodes' internal children and references so far, then where they
+// start (child node, reference).
+var<workgroup> wave_children: atomic<u32>;
+var<workgroup> wave_prims: atomic<u32>;
+var<workgroup> wave_bases: vec2<u32>;
+
+// Emits wide node `w` if w < end (from binary node `wide_sources[w]`, the root from node 0), in a
+// wave with the workgroup's other invocations: the wave's children and references are allocated
+// with one device atomic per counter, not one per node. Returns the end of w's internal children
+// (0: none, or not emitted). Every invocation of the workgroup calls it (uniform control flow).
+fn emit_wave_node(w: u32, end: u32, lid: u32) -> u32 {
+    let emits = w < end;
+    var draft: WideDraft;
+    var child_offset = 0u;
+    var prim_offset = 0u;
+    if emits {
+        draft = draft_wide_node(select(wide_sources[w], 0u, w == 0u));
+        child_offset = atomicAdd(&wave_children, draft.internal);
+        prim_offset = atomicAdd(&wave_prims, draft.prims);
     }
-    var child_base = 0u;
-    if draft.internal > 0u {
-        child_base = atomicAdd(&wide_counters[0], draft.internal);
-        if child_base + draft.internal > params.capacity {
-            atomicAdd(&wide_counters[2], 1u);
-            return 0u;
+    workgroupBarrier();
+    if lid == 0u {
+        let children = atomicExchange(&wave_children, 0u);
+        let prims = atomicExchange(&wave_prims, 0u);
+        var bases = vec2<u32>(0u);
+        if children > 0u {
+            bases.x = atomicAdd(&wide_counters[0], children);
         }
+        if prims > 0u {
+            bases.y = atomicAdd(&wide_counters[1], prims);
+        }
+        wave_bases = bases;
     }
-    commit_wide_node(w, draft, prim_base, child_base);
-    *base = child_base;
-    return draft.internal;
+    let bases = workgroupUniformLoad(&wave_bases);
+    if !emits {
+        return 0u;
+    }
+    let child_base = bases.x + child_offset;
+    if child_base + draft.internal > params.capacity {
+        atomicAdd(&wide_counters[2], 1u);
+        return 0u;
+    }
+    commit_wide_node(w, draft, bases.y + prim_offset, child_base);
+    return select(0u, child_base + draft.internal, draft.internal > 0u);
 }
