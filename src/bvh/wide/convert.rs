@@ -35,6 +35,16 @@ pub fn check_leaf_sizes(bvh: &Bvh) -> Result<()> {
     }
 }
 
+/// Fails on an empty tree and on leaves too large for the layout (`check_leaf_sizes`).
+fn check_convertible(bvh: &Bvh) -> Result<()> {
+    if bvh.nodes.is_empty() {
+        return Err(Error::InvalidArgument(
+            "cannot convert an empty tree".into(),
+        ));
+    }
+    check_leaf_sizes(bvh)
+}
+
 /// The most wide nodes the conversion makes from a binary tree of `leaves` leaves (at least 1).
 /// A wide node with fewer than 8 children has only leaves as children (`open_children` opens
 /// internal children while a slot is free), and at least two of them unless it is a root over a
@@ -144,31 +154,22 @@ impl WideBvh {
     /// Converts a binary tree (any builder's) into the wide layout, as the GPU does (the greedy
     /// collapse). Fails on a leaf of more than [`MAX_WIDE_LEAF_SIZE`] references.
     pub fn from_binary(bvh: &Bvh) -> Result<WideBvh> {
-        Self::convert(bvh, |source| open_children(bvh, source))
+        check_convertible(bvh)?;
+        Ok(Self::convert(bvh, |source| open_children(bvh, source)))
     }
 
     /// Converts a binary tree with the SAH-optimal collapse (`OptimalCollapse` under `params`)
     /// instead of the greedy one; slots and quantization as `from_binary`. A CPU reference: the
     /// GPU conversion is greedy.
     pub fn from_binary_optimal(bvh: &Bvh, params: &SahParams) -> Result<WideBvh> {
-        if bvh.nodes.is_empty() {
-            return Err(Error::InvalidArgument(
-                "cannot convert an empty tree".into(),
-            ));
-        }
+        check_convertible(bvh)?;
         let collapse = OptimalCollapse::new(bvh, params);
-        Self::convert(bvh, |source| collapse.children(bvh, source))
+        Ok(Self::convert(bvh, |source| collapse.children(bvh, source)))
     }
 
-    /// The conversion with the children of each wide node (binary nodes) from `children` of the
-    /// binary node it is made from.
-    fn convert(bvh: &Bvh, children: impl Fn(u32) -> Vec<u32>) -> Result<WideBvh> {
-        if bvh.nodes.is_empty() {
-            return Err(Error::InvalidArgument(
-                "cannot convert an empty tree".into(),
-            ));
-        }
-        check_leaf_sizes(bvh)?;
+    /// The conversion of a tree that `check_convertible` accepted, with the children of each
+    /// wide node (binary nodes) from `children` of the binary node it is made from.
+    fn convert(bvh: &Bvh, children: impl Fn(u32) -> Vec<u32>) -> WideBvh {
         let mut wide = WideBvh {
             nodes: vec![WideNode::default()],
             prim_indices: Vec::with_capacity(bvh.prim_indices.len()),
@@ -242,7 +243,7 @@ impl WideBvh {
             }
             wide.nodes[w] = node;
         }
-        Ok(wide)
+        wide
     }
 }
 
