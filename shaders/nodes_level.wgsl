@@ -71,6 +71,11 @@ fn child_level(child: u32) -> u32 {
 var<workgroup> workgroup_roots: array<atomic<u32>, MAX_LEVEL_DISPATCHES + 1u>;
 var<workgroup> workgroup_slots: array<u32, MAX_LEVEL_DISPATCHES + 1u>;
 
+// Whether roots of `level` (0: no root) go into a bucket: levels 1 ..= level_dispatches + 1.
+fn is_bucketed(level: u32) -> bool {
+    return level != 0u && level <= params.level_dispatches + 1u;
+}
+
 // Once the workgroup has counted its roots per level: reserves their slots, one device atomic
 // per level (between two barriers).
 fn reserve_workgroup_slots(lid: u32) {
@@ -89,7 +94,7 @@ fn reserve_workgroup_slots(lid: u32) {
 // atomic per level, not one per root on the level's word (which a GPU serializes). Every
 // invocation of the workgroup calls it (uniform control flow).
 fn bucket_together(node: u32, level: u32, lid: u32) {
-    let bucketed = level != 0u && level <= params.level_dispatches + 1u;
+    let bucketed = is_bucketed(level);
     var rank = 0u;
     if bucketed {
         rank = atomicAdd(&workgroup_roots[level - 1u], 1u);
@@ -111,17 +116,14 @@ var<workgroup> root_queue: array<vec3<u32>, ROOT_QUEUE>;
 var<workgroup> queued_roots: atomic<u32>;
 var<workgroup> queue_length: u32;
 
-// Adds the root `node` of level `level` (>= 1) to its level's bucket, if its level is bucketed,
-// with a device atomic of its own.
+// Adds the root `node` of a bucketed level `level` to its bucket, with a device atomic of its own.
 fn bucket(node: u32, level: u32) {
-    if level <= params.level_dispatches + 1u {
-        roots[level_start(level) + atomicAdd(&schedule[level - 1u], 1u)] = node;
-    }
+    roots[level_start(level) + atomicAdd(&schedule[level - 1u], 1u)] = node;
 }
 
 // Queues the root `node` of level `level` (>= 1) for `bucket_queue`, if its level is bucketed.
 fn queue_root(node: u32, level: u32) {
-    if level > params.level_dispatches + 1u {
+    if !is_bucketed(level) {
         return;
     }
     let at = atomicAdd(&queued_roots, 1u);

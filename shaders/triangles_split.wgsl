@@ -67,6 +67,12 @@ struct Clipped {
     empty: bool,
 }
 
+// Whether coordinate v lies on the side of a clip plane at `bound` that is kept (below it, or
+// above it), the plane included.
+fn on_kept_side(v: f32, bound: f32, keep_below: bool) -> bool {
+    return select(v >= bound, v <= bound, keep_below);
+}
+
 // Box of the triangle clipped to [lo, hi], intersected with [lo, hi]. Sutherland–Hodgman over
 // the six planes, the polygon alternating between the two halves of `poly` (no copy back). A plane
 // that keeps every vertex leaves the polygon as it is and is skipped; one that keeps none empties
@@ -85,7 +91,7 @@ fn clip_triangle(t: Triangle, lo: vec3<f32>, hi: vec3<f32>) -> Clipped {
         var kept = 0u;
         for (var k = 0u; k < n; k++) {
             let v = poly[src + k][axis];
-            kept += select(0u, 1u, select(v >= bound, v <= bound, keep_below));
+            kept += select(0u, 1u, on_kept_side(v, bound, keep_below));
         }
         if kept == n {
             continue;
@@ -96,8 +102,8 @@ fn clip_triangle(t: Triangle, lo: vec3<f32>, hi: vec3<f32>) -> Clipped {
             for (var k = 0u; k < n; k++) {
                 let a = poly[src + k];
                 let b = poly[src + select(k + 1u, 0u, k + 1u == n)];
-                let a_in = select(a[axis] >= bound, a[axis] <= bound, keep_below);
-                let b_in = select(b[axis] >= bound, b[axis] <= bound, keep_below);
+                let a_in = on_kept_side(a[axis], bound, keep_below);
+                let b_in = on_kept_side(b[axis], bound, keep_below);
                 if a_in && m < MAX_POLYGON {
                     poly[dst + m] = a;
                     m++;
