@@ -22,7 +22,7 @@ use treelet::bvh::{
     TreeUpdater, UpdateMode, ValidationError, DEFAULT_SPLIT_PERCENT,
 };
 use treelet::device::{Geometry, Tree, WideTree};
-use treelet::geometry::{Aabb, Ray};
+use treelet::geometry::{Aabb, Hit, Ray};
 use treelet::scene::{load_scene, Scene, Triangle};
 use treelet::trace::{any_hits_wide, closest_hits, closest_hits_wide, PathTracer, RenderSettings};
 
@@ -144,6 +144,27 @@ fn every_level_schedule_gives_the_same_tree() {
     }
 }
 
+/// Any hit through the wide layout: found exactly when the closest hit (`oracle`) lies in the
+/// ray's interval, and inside it.
+fn assert_any_hits_match(
+    name: &str,
+    geometry: &Geometry,
+    tree: &Tree,
+    rays: &[Ray],
+    oracle: &[Hit],
+) {
+    let any = any_hits_wide(gpu(), geometry, tree, rays).unwrap();
+    for (i, (a, o)) in any.iter().zip(oracle).enumerate() {
+        assert_eq!(a.is_hit(), o.is_hit(), "{name} ray {i}: any hit");
+        if a.is_hit() {
+            assert!(
+                a.t >= rays[i].t_min && a.t <= rays[i].t_max,
+                "{name} ray {i}"
+            );
+        }
+    }
+}
+
 #[test]
 fn wide_hits_equal_brute_force() {
     let scenes = [
@@ -167,14 +188,7 @@ fn wide_hits_equal_brute_force() {
                 "{}: wide and binary distances",
                 scene.name
             );
-            // Any hit: found exactly when the closest hit lies in the interval.
-            let any = any_hits_wide(gpu(), &geometry, &tree, &plain).unwrap();
-            for (i, (a, o)) in any.iter().zip(&oracle).enumerate() {
-                assert_eq!(a.is_hit(), o.is_hit(), "{} ray {i}: any hit", scene.name);
-                if a.is_hit() {
-                    assert!(a.t >= plain[i].t_min && a.t <= plain[i].t_max, "ray {i}");
-                }
-            }
+            assert_any_hits_match(&scene.name, &geometry, &tree, &plain, &oracle);
             println!("{} {}: {ties} ties", scene.name, builder.label());
         }
         // A CPU reference tree, uploaded and converted.
@@ -222,10 +236,7 @@ fn optimal_collapse_is_valid_and_traces_brute_force_hits() {
         let hits = closest_hits_wide(gpu(), &geometry, &tree, &plain).unwrap();
         assert_hits_match(&scene.triangles, &rays, &hits);
         let oracle = oracle_hits(&scene.triangles, &rays);
-        let any = any_hits_wide(gpu(), &geometry, &tree, &plain).unwrap();
-        for (i, (a, o)) in any.iter().zip(&oracle).enumerate() {
-            assert_eq!(a.is_hit(), o.is_hit(), "{} ray {i}: any hit", scene.name);
-        }
+        assert_any_hits_match(&scene.name, &geometry, &tree, &plain, &oracle);
     }
 }
 

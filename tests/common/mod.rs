@@ -16,20 +16,20 @@ use treelet::trace::brute_force_closest_hit;
 /// The test GPU (the software driver in CI). Set `XDG_RUNTIME_DIR` quietly if missing.
 pub fn gpu() -> &'static GpuContext {
     static GPU: OnceLock<GpuContext> = OnceLock::new();
-    GPU.get_or_init(|| {
-        GpuContext::new(&GpuOptions::default())
-            .expect("a Vulkan adapter (run scripts/install-deps.sh)")
-    })
+    GPU.get_or_init(|| open_gpu(&GpuOptions::default()))
+}
+
+fn open_gpu(options: &GpuOptions) -> GpuContext {
+    GpuContext::new(options).expect("a Vulkan adapter (run scripts/install-deps.sh)")
 }
 
 /// A device of the test GPU's adapter with the bottom-up climbs at `width` invocations per
 /// workgroup (`GpuOptions::climb_width`): a GPU's width on the software driver, and the reverse.
 pub fn gpu_with_climb_width(width: u32) -> GpuContext {
-    GpuContext::new(&GpuOptions {
+    open_gpu(&GpuOptions {
         climb_width: Some(width),
         ..GpuOptions::default()
     })
-    .expect("a Vulkan adapter (run scripts/install-deps.sh)")
 }
 
 pub fn rng(seed: u64) -> Pcg64 {
