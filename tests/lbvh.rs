@@ -40,10 +40,16 @@ fn morton_cell_size(key_bits: u32) -> [i64; 3] {
 /// quality is compared with the CPU twin's only from here up.
 const SAH_COMPARISON_MIN_PRIMS: usize = 1000;
 
+/// Nor with keys of fewer bits than this (10 per axis): in a grid of a few cells per axis, a key
+/// moving one cell moves its primitive across a large part of the scene (an H200's keys gave
+/// field-10k at 7 bits an SAH of 38.01 against the CPU keys' 38.74). The stages are still
+/// compared exactly from the GPU's own keys at every width.
+const SAH_COMPARISON_MIN_KEY_BITS: u32 = 30;
+
 /// The GPU tree's SAH is within 0.5 % of the CPU twin's (which builds from its own keys of
 /// `key_bits`).
 fn assert_sah_close_to_cpu_twin(bvh: &Bvh, triangles: &[Triangle], key_bits: u32) {
-    if triangles.len() < SAH_COMPARISON_MIN_PRIMS {
+    if triangles.len() < SAH_COMPARISON_MIN_PRIMS || key_bits < SAH_COMPARISON_MIN_KEY_BITS {
         return;
     }
     let sah = SahParams::default();
@@ -56,7 +62,7 @@ fn assert_sah_close_to_cpu_twin(bvh: &Bvh, triangles: &[Triangle], key_bits: u32
     );
     assert!(
         (got - want).abs() <= 0.005 * want,
-        "SAH {got} vs CPU twin {want}"
+        "SAH {got} vs CPU twin {want} ({key_bits}-bit keys)"
     );
 }
 
