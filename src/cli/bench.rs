@@ -56,8 +56,8 @@ pub struct BenchArgs {
           value_parser = clap::value_parser!(u32).range(0..=i64::from(MAX_LEVEL_DISPATCHES)))]
     level_dispatches: Vec<u32>,
     /// Treelet levels of fewer treelets than this are optimized by teams of 32 invocations, the
-    /// others one treelet per invocation (trbvh, trbvh-split; default: 4096 on GPUs, 0 on CPU
-    /// devices); a comma-separated list to compare. The tree is the same for every value
+    /// others one treelet per invocation (trbvh, trbvh-split; default: 0, never); a
+    /// comma-separated list to compare. The tree is the same for every value
     #[arg(long, value_delimiter = ',')]
     team_below: Vec<u32>,
     /// Time every dispatch on its own (each in a compute pass of its own, which may cost a little
@@ -342,9 +342,7 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
                 .treelet_settings()
                 .map(|s| f64::from(s.split_percent) / 100.0),
             level_dispatches: schedule.level_dispatches,
-            team_below: builder
-                .treelet_settings()
-                .map(|_| schedule.team_below(gpu.info.device_type)),
+            team_below: builder.treelet_settings().map(|_| schedule.team_below()),
             sort_tile_items: gpu.sort_tile_items,
             climb_width: gpu.climb_width(),
             adapter: gpu.adapter_description(),

@@ -42,7 +42,7 @@ pub const MAX_TREELET_SIZE: u32 = 8;
 pub const MIN_TREELET_SIZE: u32 = 3;
 /// Treelet levels a restructuring round gives one dispatch each at most; the levels above are
 /// climbed by one workgroup (`bvh::treelet`).
-pub const MAX_LEVEL_DISPATCHES: u32 = 24;
+pub const MAX_LEVEL_DISPATCHES: u32 = 32;
 /// Largest leaf the GPU collapse may create (its gather stack holds a leaf's subtree).
 pub const MAX_GPU_LEAF_SIZE: u32 = 32;
 /// Widening of a box's exit distance in the traversal's box test (Ize 2013): rounding never culls

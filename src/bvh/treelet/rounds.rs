@@ -11,12 +11,13 @@
 //! order memory, so the treelet kernels read and write node data with plain loads and stores, not
 //! atomics.
 //!
-//! Who optimizes a treelet: a level (or a climbed wave) of many treelets gives each its own
-//! invocation, which runs the whole DP alone (throughput); a level of fewer than `team_below`
-//! treelets gives each a team of 32 invocations that runs the DP's subsets of one size side by
-//! side, as the paper does with a warp (latency: the levels near the top of a tree hold a few
-//! treelets each, and a tree has 20-40 levels per round, each waiting for the one before). Both
-//! find the same topology (same operations, same tie-breaking). The treelet size is a pipeline
+//! Who optimizes a treelet: by default its own invocation, which runs the whole DP alone
+//! (throughput). On request (`RoundSchedule::team_below`) a level of fewer treelets gives each a
+//! team of 32 invocations that runs the DP's subsets of one size side by side, as the paper does
+//! with a warp (for latency: the levels near the top of a tree hold a few treelets each, and a
+//! tree has 20-40 levels per round, each waiting for the one before); measured, teams paid
+//! neither on lavapipe nor on an H200. Both find the same topology (same operations, same
+//! tie-breaking). The treelet size is a pipeline
 //! constant: the treelet kernels are compiled per size when first used, the lone DP written out
 //! for it (`dp_unrolled`).
 
@@ -114,18 +115,32 @@ pub(crate) struct Round {
     pub levels_only: bool,
 }
 
-/// Levels a round of `n` leaves and smallest root `gamma` gives a dispatch each: about as many as
-/// have more roots than the climbing workgroup has invocations, 128 (level L of a balanced tree has
-/// about n / (γ·2^L) roots), plus two for unbalanced trees.
-pub(crate) fn level_dispatches(n: u32, gamma: u32) -> u32 {
-    let workgroup = TREELETS_CLIMB.info.workgroup_size[0];
-    let wide = (n / gamma.max(1) / workgroup).max(1);
-    (wide.ilog2() + 2).min(MAX_LEVEL_DISPATCHES)
+/// Levels a round of `n` leaves and smallest root `gamma` gives a dispatch each on a device of
+/// type `device`; the levels above are climbed by one workgroup. A level's dispatch costs its
+/// launch and a wait (~45-60 µs a level on an H200, however few its treelets), a climbed wave a
+/// few barriers (~20 µs) but only 128 invocations: dispatches pay while a level has more
+/// treelets than that.
+/// - On a GPU: log2(n) − 4, fitted to an H200 sweep of 8-20 levels (trbvh, the fastest build
+///   within 2 %: conference and crytek_sponza 14, sibenik and lost_empire 12, field:224 10,
+///   field:707 14-16, field:2000 18; `scripts/gpu-schedules.sh`). The shared scenes' trees have
+///   20-37 levels per round and more roots per level than a balanced tree: each level of more
+///   than 128 roots (14 on conference) gets a dispatch.
+/// - On a CPU device: the levels of more roots than 128 in a balanced tree (level L has about
+///   n / (γ·2^L)), plus two for unbalanced trees.
+pub(crate) fn level_dispatches(n: u32, gamma: u32, device: wgpu::DeviceType) -> u32 {
+    let levels = match device {
+        wgpu::DeviceType::Cpu => {
+            let workgroup = TREELETS_CLIMB.info.workgroup_size[0];
+            (n / gamma.max(1) / workgroup).max(1).ilog2() + 2
+        }
+        _ => n.max(1).ilog2().saturating_sub(4),
+    };
+    levels.min(MAX_LEVEL_DISPATCHES)
 }
 
 /// How the rounds spread their work over the device. Any schedule builds the same tree (tests
-/// check the extremes); the defaults are estimates for tuning on a real GPU (`treelet bench
-/// --level-dispatches ... --team-below ...`).
+/// check the extremes); the defaults come from sweeps on lavapipe and an H200 (`treelet bench
+/// --level-dispatches ... --team-below ...`, `scripts/gpu-schedules.sh`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct RoundSchedule {
     /// Treelet levels per round that get a dispatch of their own, at most
@@ -135,31 +150,24 @@ pub struct RoundSchedule {
     /// Levels (and climbed waves) of fewer treelets than this are optimized by teams of 32
     /// invocations, the others one treelet per invocation; 0 never uses teams, u32::MAX uses them
     /// for every level and every climbed wave of fewer than 32 treelets. None:
-    /// `default_team_below` of the device.
+    /// `DEFAULT_TEAM_BELOW` (never).
     pub team_below: Option<u32>,
 }
 
 impl RoundSchedule {
-    /// The team threshold on a device of `device` type.
-    pub fn team_below(&self, device: wgpu::DeviceType) -> u32 {
-        self.team_below
-            .unwrap_or_else(|| default_team_below(device))
+    /// The team threshold in effect.
+    pub fn team_below(&self) -> u32 {
+        self.team_below.unwrap_or(DEFAULT_TEAM_BELOW)
     }
 }
 
-/// The level size below which teams optimize the treelets on a device. On a GPU a lone
-/// invocation's DP is a chain of ~1000 dependent partition tests that a level of few treelets
-/// cannot hide, while a team of 32 (one warp) syncs almost for free: 4096 is an estimate of where
-/// a team's ~7x more instructions per treelet start to cost more than its ~10x shorter chain
-/// saves (not yet measured). On a CPU device (lavapipe) invocations are SIMD lanes and every
-/// barrier switches between them: teams cost ~17x more per treelet there (measured on field:224:
-/// treelet stage 205 ms never, 228 ms below 64, 3.6 s always), so never.
-fn default_team_below(device: wgpu::DeviceType) -> u32 {
-    match device {
-        wgpu::DeviceType::Cpu => 0,
-        _ => 4096,
-    }
-}
+/// The level size below which teams optimize the treelets by default: 0, never. On lavapipe
+/// invocations are SIMD lanes and every barrier switches between them: teams cost ~17x more per
+/// treelet (field:224: treelet stage 205 ms never, 228 ms below 64, 3.6 s always). On an H200
+/// teams did not pay either, not even near the top of the tree where a level holds a few
+/// treelets: trbvh with 16 levels dispatched, conference 4.49 ms never, 7.54 ms below 512,
+/// 8.37 ms below 4096; field:707 5.40, 6.44 and 7.36 ms (`scripts/gpu-schedules.sh`).
+const DEFAULT_TEAM_BELOW: u32 = 0;
 
 /// Treelet sizes with kernels of their own, MIN_TREELET_SIZE..=MAX_TREELET_SIZE.
 const TREELET_SIZES: usize = (MAX_TREELET_SIZE - MIN_TREELET_SIZE + 1) as usize;
@@ -211,10 +219,10 @@ impl TreeletRounds {
     }
 
     /// Levels of a round of `n` leaves and smallest root `gamma` that get a dispatch each.
-    fn dispatched(&self, n: u32, gamma: u32) -> u32 {
+    fn dispatched(&self, n: u32, gamma: u32, device: wgpu::DeviceType) -> u32 {
         self.schedule
             .level_dispatches
-            .unwrap_or_else(|| level_dispatches(n, gamma))
+            .unwrap_or_else(|| level_dispatches(n, gamma, device))
             .min(MAX_LEVEL_DISPATCHES)
     }
 
@@ -224,7 +232,13 @@ impl TreeletRounds {
         let words = gammas
             .iter()
             .filter(|&&gamma| gamma != u32::MAX)
-            .map(|&gamma| level_start(n, gamma, self.dispatched(n, gamma) + 2))
+            .map(|&gamma| {
+                level_start(
+                    n,
+                    gamma,
+                    self.dispatched(n, gamma, ctx.info.device_type) + 2,
+                )
+            })
             .max()
             .unwrap_or(0)
             .max(1);
@@ -250,7 +264,7 @@ impl TreeletRounds {
         let ctx = rec.ctx;
         let mut pass = rec.pass("treelets");
         let n = count.capacity();
-        let dispatched = self.dispatched(n, round.gamma);
+        let dispatched = self.dispatched(n, round.gamma, ctx.info.device_type);
         let roots = self.roots.as_ref().expect("reserve() allocates the roots");
         // One invocation per leaf, or per internal node when only levels are computed.
         let level = if round.levels_only {
@@ -270,7 +284,7 @@ impl TreeletRounds {
             level_dispatches: dispatched,
             level: 0,
             levels_only: u32::from(round.levels_only),
-            team_below: self.schedule.team_below(ctx.info.device_type),
+            team_below: self.schedule.team_below(),
             next_gamma: round.next_gamma,
             _pad: [0; 4],
         };
