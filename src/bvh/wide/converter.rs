@@ -38,17 +38,20 @@ impl WideConverter {
     }
 
     /// Level dispatches for a tree of up to `prims` references on a device of this type: on a
-    /// GPU the levels where most wide nodes lie (log8 of the leaves, and a few more for
-    /// unbalanced trees), the narrow tail left to one workgroup; on a CPU device, where that
-    /// workgroup is one thread, 4 levels more (lavapipe, trbvh trees, the stage in three
-    /// alternating runs: conference 47-48 -> 36-39 ms, crytek_sponza 30-33 -> 28-29 ms,
+    /// GPU about every level a deep tree has, log2 of the references plus 2 (the tail's one
+    /// workgroup runs on one multiprocessor: with log8 + 4 levels dispatched, conference's wide
+    /// stage took 4.7-5.3 ms on an H200 against 0.5-0.8 ms for the other shared scenes, whose
+    /// trees are shallower; an empty level costs only its launch); on a CPU device, where that
+    /// workgroup is one thread, log8 + 8 (lavapipe, trbvh trees, the stage in three alternating
+    /// runs against log8 + 4: conference 47-48 -> 36-39 ms, crytek_sponza 30-33 -> 28-29 ms,
     /// lost_empire unchanged).
     pub fn level_dispatches(prims: u32, device: wgpu::DeviceType) -> u32 {
-        let extra = match device {
-            wgpu::DeviceType::Cpu => 8,
-            _ => 4,
+        let prims = prims.max(1);
+        let levels = match device {
+            wgpu::DeviceType::Cpu => prims.ilog2() / 3 + 8,
+            _ => prims.ilog2() + 2,
         };
-        (prims.max(1).ilog2() / 3 + extra).min(MAX_WIDE_LEVEL_DISPATCHES)
+        levels.min(MAX_WIDE_LEVEL_DISPATCHES)
     }
 
     /// Fixes the number of level dispatches (tests: every schedule gives the same tree); `None`
