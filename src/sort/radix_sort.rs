@@ -50,20 +50,22 @@ const SORT_WORKGROUP: u32 = 256;
 /// Keys per invocation a sort may use (`tile_items`): tiles of 2048, 4096 or 8192 keys.
 pub const SORT_TILE_ITEMS: [u32; 3] = [8, 16, 32];
 
-/// Keys per invocation (a tile is 256 times as many keys) for `len` keys on a device of
-/// `device` type. Each scatter workgroup sums 16 counts per tile, so the work of finding the
-/// offsets grows with the square of the tile count; smaller tiles give more workgroups. On a GPU
-/// the smallest tile with at most `GPU_TILES` tiles (conference's 331k keys: tiles of 2048, 162
-/// workgroups instead of 41 for 132 multiprocessors; an estimate, not measured on a GPU yet); on a
-/// CPU device (lavapipe), where every invocation is a SIMD lane of few cores, the largest (tiles
-/// of 2048 cost lavapipe's sort about half again).
 /// `items` if it is one of `SORT_TILE_ITEMS`, else a clear error.
 pub fn check_tile_items(items: u32) -> Result<u32> {
     crate::error::one_of("sort tile items", items, &SORT_TILE_ITEMS)
 }
 
+/// Keys per invocation (a tile is 256 times as many keys) for `len` keys on a device of
+/// `device` type. Each scatter workgroup sums 16 counts per tile, so the work of finding the
+/// offsets grows with the square of the tile count; smaller tiles give more workgroups.
+/// - On a GPU, the smallest tile with at most `GPU_TILES` tiles. On an H200 more workgroups paid
+///   at both ends measured (`scripts/gpu-profile.sh`, lbvh sort stage): conference's 331k keys
+///   0.27 ms in 162 tiles of 2048 keys, 0.29 ms in 81, 0.45 ms in 41; field:2000's 8.7M keys
+///   7.3 ms in 2128 tiles of 4096, 10.3 ms in 1064 of 8192.
+/// - On a CPU device (lavapipe), where every invocation is a SIMD lane of few cores, the largest
+///   (tiles of 2048 cost lavapipe's sort about half again).
 pub fn tile_items(len: u32, device: wgpu::DeviceType) -> u32 {
-    const GPU_TILES: u32 = 256;
+    const GPU_TILES: u32 = 2560;
     match device {
         wgpu::DeviceType::Cpu => SORT_TILE_ITEMS[2],
         _ => SORT_TILE_ITEMS
