@@ -1,0 +1,112 @@
+#!/usr/bin/env bash
+# Everything a lent GPU is asked to measure, in one `device` call that fits a short lease: the
+# test binaries, the round schedule sweep (levels dispatched, LEVELS; team threshold, TEAMS),
+# build scaling, the binary-vs-wide table and every dispatch timed, in that order, each step
+# capped so that the whole run ends within BUDGET seconds (default 500; STEPS picks some of the
+# steps, e.g. STEPS="tests schedules"). After every step the results so far are packed into
+# $OUT/results.tar.gz, so a call stopped at its limit still brings back what ran. A summary is
+# printed last.
+# Here, first:   bash ../shared/gpu/pack.sh
+# (optionally also a baseline binary: xz -c OLD/treelet > .gpu/base-treelet.xz, timed beside the
+# new one on the same GPU), then `run` with carry [".gpu", ".gl"], timeout_s 600 and the command:
+#   bash scripts/gpu-all.sh
+set -u
+start=$(date +%s)
+budget=${BUDGET:-500}
+final=${OUT:-/tmp/out}
+mkdir -p "$final"
+res=/tmp/gpu-all
+rm -rf $res
+mkdir -p $res/tests
+elapsed() { echo $(($(date +%s) - start)); }
+save() { tar -C $res -czf "$final/results.tar.gz" .; }
+# step NAME CAP COMMAND...: runs COMMAND with at most CAP seconds (less if the budget is short),
+# its output in NAME.txt.
+step() {
+  local name=$1 cap=$2 left
+  shift 2
+  case " ${STEPS:-tests schedules scaling layouts profile} " in
+    *" $name "*) ;;
+    *) return ;;
+  esac
+  left=$((budget - $(elapsed)))
+  if [ $left -lt 15 ]; then
+    echo "== $name: skipped (budget spent)"
+    return
+  fi
+  [ "$cap" -gt $left ] && cap=$left
+  echo "== $name (at $(elapsed) s, cap $cap s)"
+  timeout "$cap" "$@" > "$res/$name.txt" 2>&1
+  echo "   rc=$? after $(elapsed) s"
+  save
+}
+
+# Unpack the binaries and scenes once (.gpu/run.sh with no mode), then run from there.
+OUT=$res bash .gpu/run.sh > $res/setup.txt 2>&1 || { cat $res/setup.txt; save; exit 1; }
+cat $res/setup.txt
+work=/tmp/treelet-gpu
+export TREELET=$work/treelet TREELET_SCENES_DIR=$work/scenes OUT=$res
+icd=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
+[ -f $icd ] && export VK_DRIVER_FILES=$icd
+manifest=$(cat $work/manifest_dir)
+export manifest res
+base=""
+if [ -f .gpu/base-treelet.xz ]; then
+  xz -dc .gpu/base-treelet.xz > $work/base-treelet && chmod +x $work/base-treelet && base=$work/base-treelet
+fi
+
+small="--width 64 --height 64 --spp 1 --repeats 21"
+scaling() {
+  for s in field:224 field:707 field:1000 field:2000 conference crytek_sponza sibenik lost_empire; do
+    timeout 60 $TREELET bench --scene $s --builder lbvh,trbvh,trbvh-split $small >> $res/scaling.jsonl
+  done
+  if [ -n "$base" ]; then
+    for s in field:707 conference sibenik; do
+      timeout 40 $base bench --scene $s --builder lbvh,trbvh,trbvh-split $small >> $res/baseline.jsonl
+    done
+  fi
+}
+export -f scaling
+export small base work
+tests() {
+  # shellcheck disable=SC2016
+  ls $work/bin/* | xargs -P 4 -I{} bash -c \
+    'n=$(basename {}); cd "$manifest" && timeout 140 {} --test-threads 4 > $res/tests/$n.log 2>&1; echo "$n rc=$?" >> $res/tests/rc.txt'
+}
+export -f tests
+step tests 150 bash -c tests
+step schedules 150 env SCENES="${SCHEDULE_SCENES:-conference crytek_sponza sibenik lost_empire field:224 field:707 field:2000}" \
+  LEVELS="${LEVELS:-16,24,32,40,48,64}" TEAMS="${TEAMS:-0}" CLIMBS=" " REPEATS=11 bash scripts/gpu-schedules.sh
+step scaling 80 bash -c scaling
+step layouts 70 env SCENES="conference crytek_sponza sibenik lost_empire armadillo" OPTIMAL_SCENES=" " \
+  REPEATS=11 bash scripts/gpu-layouts.sh
+step profile 45 env SCENES="conference field:2000" TILES="default 16" BUILDERS=lbvh,trbvh REPEATS=5 bash scripts/gpu-profile.sh
+
+echo "== summary (at $(elapsed) s)"
+echo "tests:"
+for f in "$res"/tests/*.log; do
+  [ -f "$f" ] || continue
+  printf '  %-18s %s %s\n' "$(basename "$f" .log)" "$(grep -E "^$(basename "$f" .log) rc=" $res/tests/rc.txt 2>/dev/null | cut -d' ' -f2)" \
+    "$(grep -E '^test result' "$f" | tail -1)"
+  grep -E '^test .* FAILED$' "$f" | head -8 | sed 's/^/      /'
+done
+python3 - $res <<'PY'
+import json, os, sys
+res = sys.argv[1]
+def rows(name):
+    p = os.path.join(res, name)
+    return [json.loads(l) for l in open(p) if l.startswith("{")] if os.path.exists(p) else []
+for name in ("scaling.jsonl", "baseline.jsonl"):
+    print(f"{name}: scene, builder, triangles, build ms (min/median/max), Mtris/s, stages ms, SAH")
+    for r in rows(name):
+        st = " ".join(f"{k} {v:.2f}" for k, v in (r.get("stages_ms") or {}).items() if v is not None)
+        b = r.get("build_ms_spread") or {}
+        print(f"  {os.path.basename(r['scene'])[:14]:14} {r['builder']:11} {r['triangles']:>9}"
+              f" {b.get('min', 0):7.2f} {r['build_ms']:7.2f} {b.get('max', 0):7.2f}"
+              f" {r.get('mtris_per_s') or 0:7.1f}  {st}  {r.get('sah') or 0:.4f}")
+PY
+for f in layouts profile schedules; do
+  echo "--- $f (tail)"
+  tail -n 40 $res/$f.txt 2>/dev/null
+done
+save
