@@ -76,11 +76,12 @@ tests() {
 export -f tests
 step tests 150 bash -c tests
 step schedules 150 env SCENES="${SCHEDULE_SCENES:-conference crytek_sponza sibenik lost_empire field:224 field:707 field:2000}" \
-  LEVELS="${LEVELS:-16,24,32,40,48,64}" TEAMS="${TEAMS:-0}" CLIMBS=" " REPEATS=11 bash scripts/gpu-schedules.sh
+  LEVELS="${LEVELS:-10,12,14,16,18,20}" TEAMS="${TEAMS:-0}" CLIMBS=" " REPEATS=11 bash scripts/gpu-schedules.sh
 step scaling 80 bash -c scaling
 step layouts 70 env SCENES="conference crytek_sponza sibenik lost_empire armadillo" OPTIMAL_SCENES=" " \
   REPEATS=11 bash scripts/gpu-layouts.sh
-step profile 45 env SCENES="conference field:2000" TILES="default 16" BUILDERS=lbvh,trbvh REPEATS=5 bash scripts/gpu-profile.sh
+step profile 60 env SCENES="conference field:707 field:2000" TILES="default 8 16 32" BUILDERS=lbvh \
+  REPEATS=5 bash scripts/gpu-profile.sh
 
 echo "== summary (at $(elapsed) s)"
 echo "tests:"

@@ -14,7 +14,7 @@ set -u
 : > "$out/schedules.jsonl"
 for s in ${SCENES:-conference sibenik field:707}; do
   # The default schedule first (no options), then the sweep.
-  for opts in "" "--level-dispatches ${LEVELS:-0,2,4,8,12,16} --team-below ${TEAMS:-0,64,512,4096,100000000}"; do
+  for opts in "" "--level-dispatches ${LEVELS:-0,8,10,12,14,16,18,20} --team-below ${TEAMS:-0,64,512}"; do
     # shellcheck disable=SC2086
     timeout 200 "$bin" bench --scene "$s" --builder trbvh $opts --width 64 --height 64 --spp 1 \
       --repeats "${REPEATS:-11}" >> "$out/schedules.jsonl" 2>> "$out/schedules.log" \
