@@ -17,9 +17,8 @@
 //! with a warp (for latency: the levels near the top of a tree hold a few treelets each, and a
 //! tree has 20-40 levels per round, each waiting for the one before); measured, teams paid
 //! neither on lavapipe nor on an H200. Both find the same topology (same operations, same
-//! tie-breaking). The treelet size is a pipeline
-//! constant: the treelet kernels are compiled per size when first used, the lone DP written out
-//! for it (`dp_unrolled`).
+//! tie-breaking). The treelet size is a pipeline constant: the treelet kernels are compiled per
+//! size when first used, the lone DP written out for it (`dp_unrolled`).
 
 use std::sync::OnceLock;
 
