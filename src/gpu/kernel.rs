@@ -112,6 +112,14 @@ pub(crate) struct CompiledKernel {
 /// Values of a kernel's pipeline-overridable constants (WGSL `override`), by name.
 pub type Overrides<'a> = &'a [(&'static str, f64)];
 
+/// The value `overrides` gives the integer constant `name`, if any.
+pub(crate) fn override_value(overrides: Overrides, name: &str) -> Option<u32> {
+    overrides
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map(|&(_, value)| value as u32)
+}
+
 /// The constant that sets a kernel's workgroup width where its WGSL declares
 /// `override WORKGROUP_WIDTH: u32 = <the declaration's width>;` and
 /// `@workgroup_size(WORKGROUP_WIDTH)`. A kernel compiled with it overridden covers its items
@@ -201,10 +209,8 @@ impl<P: Pod> Kernel<P> {
         decl: &'static KernelDecl<P>,
         overrides: Overrides,
     ) -> Self {
-        let width = overrides
-            .iter()
-            .find(|(name, _)| *name == WORKGROUP_WIDTH_OVERRIDE)
-            .map_or(decl.info.workgroup_size[0], |&(_, width)| width as u32);
+        let width = override_value(overrides, WORKGROUP_WIDTH_OVERRIDE)
+            .unwrap_or(decl.info.workgroup_size[0]);
         Self {
             info: &decl.info,
             compiled: ctx.compiled_kernel(&decl.info, overrides),

@@ -22,7 +22,7 @@ use std::fmt::Write;
 
 use super::dp::partitions;
 use crate::gpu::constants::{MAX_TREELET_SIZE, MIN_TREELET_SIZE};
-use crate::gpu::Overrides;
+use crate::gpu::{override_value, Overrides};
 
 /// The pipeline-overridable constant that sets the treelet size (`override TREELET_SIZE` in
 /// treelet_dp.wgsl).
@@ -31,11 +31,7 @@ pub const TREELET_SIZE_OVERRIDE: &str = "TREELET_SIZE";
 /// The include for a pipeline with these override values: `wgsl` of its `TREELET_SIZE`, or of
 /// the largest size without one (naga's checks in `tests/shaders.rs`, which set no overrides).
 pub fn wgsl_for(overrides: Overrides) -> String {
-    let treelet_size = overrides
-        .iter()
-        .find(|(name, _)| *name == TREELET_SIZE_OVERRIDE)
-        .map_or(MAX_TREELET_SIZE, |&(_, value)| value as u32);
-    wgsl(treelet_size)
+    wgsl(override_value(overrides, TREELET_SIZE_OVERRIDE).unwrap_or(MAX_TREELET_SIZE))
 }
 
 /// The text of the include `treelet_dp_unrolled.wgsl` for treelets of `m` leaves

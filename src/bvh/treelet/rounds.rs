@@ -126,15 +126,16 @@ pub(crate) struct Round {
 ///   than 128 roots (14 on conference) gets a dispatch.
 /// - On a CPU device: the levels of more roots than 128 in a balanced tree (level L has about
 ///   n / (γ·2^L)), plus two for unbalanced trees.
-pub(crate) fn level_dispatches(n: u32, gamma: u32, device: wgpu::DeviceType) -> u32 {
-    let levels = match device {
+///
+/// `TreeletRounds::dispatched` caps it at `MAX_LEVEL_DISPATCHES`, as it does a forced count.
+fn level_dispatches(n: u32, gamma: u32, device: wgpu::DeviceType) -> u32 {
+    match device {
         wgpu::DeviceType::Cpu => {
             let workgroup = TREELETS_CLIMB.info.workgroup_size[0];
             (n / gamma.max(1) / workgroup).max(1).ilog2() + 2
         }
         _ => n.max(1).ilog2().saturating_sub(4),
-    };
-    levels.min(MAX_LEVEL_DISPATCHES)
+    }
 }
 
 /// How the rounds spread their work over the device. Any schedule builds the same tree (tests
