@@ -46,7 +46,7 @@ use glam::{DVec3, Vec3};
 
 use super::topdown::{self, centroid_key, NodeSplitter, ObjectSplit, ObjectSweep, MAX_REFERENCES};
 use super::{Bvh, SahParams};
-use crate::geometry::{Aabb, Crossing, HalfSpace, Polygon};
+use crate::geometry::{Aabb, HalfSpace, Polygon};
 use crate::scene::Triangle;
 
 /// Bins per axis for spatial split candidates.
@@ -70,7 +70,7 @@ struct Reference {
 
 /// A triangle clipped by axis-aligned planes, in f64. Overflow (only conceivable for numerically
 /// degenerate input) makes its box the conservative clip box.
-type ClippedTriangle = Polygon<DVec3, MAX_POLYGON_VERTICES>;
+type ClippedTriangle = Polygon<MAX_POLYGON_VERTICES>;
 
 /// (min, max) of coordinate `axis` of `polygon`'s vertices; (∞, −∞) when empty.
 fn coordinate_range(polygon: &ClippedTriangle, axis: usize) -> (f64, f64) {
@@ -131,11 +131,11 @@ fn clip_to_box(triangle: &Triangle, bounds: &Aabb) -> ClippedTriangle {
     for axis in 0..3 {
         if tri_bounds.min[axis] < bounds.min[axis] {
             let plane = f64::from(bounds.min[axis]);
-            polygon = polygon.clip(axis, plane, HalfSpace::Above, Crossing::WithinEdgeBox);
+            polygon = polygon.clip(axis, plane, HalfSpace::Above);
         }
         if tri_bounds.max[axis] > bounds.max[axis] {
             let plane = f64::from(bounds.max[axis]);
-            polygon = polygon.clip(axis, plane, HalfSpace::Below, Crossing::WithinEdgeBox);
+            polygon = polygon.clip(axis, plane, HalfSpace::Below);
         }
     }
     polygon
@@ -215,8 +215,8 @@ fn split_reference(
     let polygon = clip_to_box(triangle, &r.bounds);
     let margin = clip_margin(triangle);
     let p = f64::from(pos);
-    let below = polygon.clip(axis, p, HalfSpace::Below, Crossing::WithinEdgeBox);
-    let above = polygon.clip(axis, p, HalfSpace::Above, Crossing::WithinEdgeBox);
+    let below = polygon.clip(axis, p, HalfSpace::Below);
+    let above = polygon.clip(axis, p, HalfSpace::Above);
     let left = if below.overflowed() || coordinate_range(&below, axis).0 < p {
         bounds_within(
             &below,

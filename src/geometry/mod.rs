@@ -6,6 +6,6 @@ mod ray;
 mod ray_triangle;
 
 pub use aabb::{Aabb, GpuAabb};
-pub use polygon::{ClipPoint, Crossing, HalfSpace, Polygon};
+pub use polygon::{HalfSpace, Polygon};
 pub use ray::{Hit, Ray};
 pub use ray_triangle::{intersect_triangle, RayTriangleTest};

@@ -15,6 +15,10 @@ pub const MORTON_GRID: u32 = 1 << 21;
 pub const MORTON_AXIS_BITS: u32 = 16;
 /// Splits per triangle at most in pre-splitting (pieces ≤ `MAX_SPLITS + 1`).
 pub const MAX_SPLITS: u32 = 31;
+/// Pieces waiting at most while one triangle is split (`split_triangle` in
+/// `triangles_split.wgsl`: the loop goes on with the side of fewer references, so a waiting piece
+/// owes at least as many as everything below it): ⌊log2(MAX_SPLITS + 1)⌋.
+pub const PIECE_STACK: u32 = (MAX_SPLITS + 1).ilog2();
 /// Candidate scales the pre-splitting budget search evaluates per step (`splits_search.wgsl`):
 /// 255 split the interval in 256, so `SPLIT_SEARCH_STEPS` steps narrow 2^32 bit patterns to one.
 pub const SPLIT_SEARCH_CANDIDATES: u32 = 255;
@@ -67,6 +71,7 @@ pub fn wgsl() -> String {
         f32_const("MORTON_GRID_MAX", (MORTON_GRID - 1) as f32),
         u32_const("MORTON_AXIS_BITS", MORTON_AXIS_BITS),
         u32_const("MAX_SPLITS", MAX_SPLITS),
+        u32_const("PIECE_STACK", PIECE_STACK),
         u32_const("SPLIT_SEARCH_CANDIDATES", SPLIT_SEARCH_CANDIDATES),
         u32_const("SPLIT_COUNT_ITEMS", SPLIT_COUNT_ITEMS),
         u32_const("SPLIT_SEARCH_STEPS", SPLIT_SEARCH_STEPS),

@@ -5,7 +5,7 @@
 
 use glam::{UVec3, Vec3};
 
-use crate::geometry::{Aabb, Crossing, HalfSpace, Polygon};
+use crate::geometry::Aabb;
 use crate::gpu::constants::{MAX_SPLITS, MORTON_GRID};
 use crate::scene::Triangle;
 
@@ -131,31 +131,42 @@ pub fn budget_scale(priorities: &[f32], budget: u32) -> f32 {
     f32::from_bits(lo)
 }
 
-/// Vertex capacity of a clipped triangle, as in the kernel (which drops vertices beyond it).
-const MAX_POLYGON: usize = 9;
-
-/// The box of triangle `t` clipped to [lo, hi] (Sutherland–Hodgman against the six planes, lower
-/// planes first, crossings as the kernel computes them), or None if nothing is left.
-fn clip_triangle(t: &Triangle, lo: Vec3, hi: Vec3) -> Option<(Vec3, Vec3)> {
-    let mut poly = Polygon::<Vec3, MAX_POLYGON>::triangle(t.vertices());
-    for plane in 0..6 {
-        let axis = plane % 3;
-        let (bound, keep) = if plane >= 3 {
-            (hi[axis], HalfSpace::Below)
-        } else {
-            (lo[axis], HalfSpace::Above)
-        };
-        poly = poly.clip(axis, bound, keep, Crossing::Interpolated);
+/// The boxes of triangle `t`'s parts below and above the plane at `position` on `axis`, each
+/// intersected with its side box ([lo, below_hi] and [above_lo, hi]), or None for a side they
+/// miss: vertices extend the side(s) they lie on (both when on the plane), each edge crossing
+/// the plane extends both by its crossing point. See `add_edge` in `triangles_split.wgsl`.
+fn split_sides(
+    t: &Triangle,
+    axis: usize,
+    position: f32,
+    (lo, below_hi): (Vec3, Vec3),
+    (above_lo, hi): (Vec3, Vec3),
+) -> [Option<(Vec3, Vec3)>; 2] {
+    let empty = (Vec3::splat(f32::MAX), Vec3::splat(-f32::MAX));
+    let (mut below, mut above) = (empty, empty);
+    let extend = |side: &mut (Vec3, Vec3), p: Vec3| *side = (side.0.min(p), side.1.max(p));
+    let [v0, v1, v2] = t.vertices();
+    for (a, b) in [(v0, v1), (v1, v2), (v2, v0)] {
+        let (ax, bx) = (a[axis], b[axis]);
+        if ax <= position {
+            extend(&mut below, a);
+        }
+        if ax >= position {
+            extend(&mut above, a);
+        }
+        if (ax < position && bx > position) || (ax > position && bx < position) {
+            let s = (position - ax) / (bx - ax);
+            let mut p = a + Vec3::new(s * (b.x - a.x), s * (b.y - a.y), s * (b.z - a.z));
+            p[axis] = position;
+            extend(&mut below, p);
+            extend(&mut above, p);
+        }
     }
-    if poly.vertices().is_empty() {
-        return None;
-    }
-    let (mut plo, mut phi) = (Vec3::splat(f32::MAX), Vec3::splat(-f32::MAX));
-    for p in poly.vertices() {
-        plo = plo.min(*p);
-        phi = phi.max(*p);
-    }
-    Some((plo.clamp(lo, hi), phi.clamp(lo, hi)))
+    let within = |(plo, phi): (Vec3, Vec3), side_lo: Vec3, side_hi: Vec3| {
+        let misses = plo.cmpgt(side_hi).any() || phi.cmplt(side_lo).any();
+        (!misses).then(|| (plo.clamp(side_lo, side_hi), phi.clamp(side_lo, side_hi)))
+    };
+    [within(below, lo, below_hi), within(above, above_lo, hi)]
 }
 
 /// A piece of a triangle being split: its box, the grid cells it covers on each axis (integers,
@@ -226,7 +237,6 @@ fn split_plane(grid: &SplitGrid, piece: &Piece, tried: u32) -> Option<(usize, u3
 
 /// The `pieces` reference boxes of triangle `t` (see `triangles_split.wgsl`).
 pub fn split_triangle(t: &Triangle, pieces: u32, grid: &SplitGrid) -> Vec<Aabb> {
-    const MAX_PIECES: usize = 32;
     let mut out = Vec::with_capacity(pieces as usize);
     let b = t.bounds();
     let (first, last) = grid.cell_range(b.min, b.max);
@@ -235,11 +245,7 @@ pub fn split_triangle(t: &Triangle, pieces: u32, grid: &SplitGrid) -> Vec<Aabb> 
         let mut halves = None;
         // A plane whose cut leaves one side empty (the piece only grazes it, by rounding) gives
         // way to the next candidate.
-        let mut tried = if piece.pieces > 1 && stack.len() + 2 <= MAX_PIECES {
-            0
-        } else {
-            0b111
-        };
+        let mut tried = if piece.pieces > 1 { 0 } else { 0b111 };
         while halves.is_none() {
             let Some((axis, cell, plane)) = split_plane(grid, &piece, tried) else {
                 break;
@@ -248,10 +254,9 @@ pub fn split_triangle(t: &Triangle, pieces: u32, grid: &SplitGrid) -> Vec<Aabb> 
             let (mut left_hi, mut right_lo) = (piece.hi, piece.lo);
             left_hi[axis] = plane;
             right_lo[axis] = plane;
-            if let (Some(l), Some(r)) = (
-                clip_triangle(t, piece.lo, left_hi),
-                clip_triangle(t, right_lo, piece.hi),
-            ) {
+            if let [Some(l), Some(r)] =
+                split_sides(t, axis, plane, (piece.lo, left_hi), (right_lo, piece.hi))
+            {
                 let (mut below, mut above) = (piece.last, piece.first);
                 below[axis] = cell - 1;
                 above[axis] = cell;
