@@ -1,9 +1,10 @@
 // Leaf collapse, step 2: compaction into the traversal layout. After exclusive scans of the kept
 // flags (new node indices; the root stays 0) and of the output leaves' primitive counts (first
-// entry of each leaf's range), one invocation per kept node writes its output node; an output
-// leaf gathers the primitives of its working subtree in depth-first order (left first) into its
-// range (as unique triangle ids when the primitives are pre-split references). Invocation 0 also
-// writes the output's node and primitive counts.
+// entry of each leaf's range), one invocation per kept node writes its output node. An output
+// leaf's range holds the primitives of its working subtree in depth-first order (left first):
+// without pre-split references, each working leaf writes its own where nodes_mark.wgsl found
+// (`leaf_slots`); with them, the output leaf gathers them as unique triangle ids. Invocation 0
+// also writes the output's node and primitive counts.
 #include "bvh_node.wgsl"
 
 struct CompactParams {
@@ -33,6 +34,8 @@ struct CompactParams {
 // The item count's limit (`gpu::ItemCount`): the tree has min(params.leaf_count, count_limit[0])
 // leaves.
 @group(0) @binding(11) var<storage, read> count_limit: array<u32>;
+// Without references: per working leaf, its output leaf and its position there (nodes_mark.wgsl).
+@group(0) @binding(12) var<storage, read> leaf_slots: array<vec2<u32>>;
 
 #include "leaf_gather.wgsl"
 
@@ -54,16 +57,37 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         tree_counts[0] = totals[KEPT];
         tree_counts[1] = totals[LEAF_PRIMS];
     }
-    if i >= node_count || (flags[i] & 1u) == 0u {
+    if i >= node_count {
         return;
     }
     let node = nodes[i];
+    let is_working_leaf = (node.right_or_count & LEAF_FLAG) != 0u;
+    if params.has_refs == 0u && is_working_leaf {
+        let slot = leaf_slots[node.left_or_first];
+        let at = scanned(LEAF_PRIMS, slot.x) + slot.y;
+        for (var k = 0u; k < (node.right_or_count & ~LEAF_FLAG); k++) {
+            out_prims[at + k] = prim_indices[node.left_or_first + k];
+        }
+    }
+    let flag = flags[i];
+    if (flag & 1u) == 0u {
+        return;
+    }
     let out = scanned(KEPT, i);
-    if (flags[i] & 2u) != 0u {
+    if (flag & 2u) != 0u {
         let first = scanned(LEAF_PRIMS, i);
-        let count = gather_leaf(i);
-        for (var k = 0u; k < count; k++) {
-            out_prims[first + k] = gathered[k];
+        var count = 0u;
+        if params.has_refs != 0u {
+            count = gather_leaf(i);
+            for (var k = 0u; k < count; k++) {
+                out_prims[first + k] = gathered[k];
+            }
+        } else {
+            // The next node's scanned entry (the total after the last node: the nodes past the
+            // tree add nothing).
+            let len = 2u * params.leaf_count - 1u;
+            let next = select(totals[LEAF_PRIMS], scanned(LEAF_PRIMS, min(i + 1u, len - 1u)), i + 1u < len);
+            count = next - first;
         }
         out_nodes[out] = BvhNode(node.min, first, node.max, LEAF_FLAG | count);
     } else {

@@ -8,7 +8,12 @@
 // the walk takes at most max_leaf_size steps instead of the node's depth. Writes flags (bit 0
 // kept, bit 1 output leaf) and the two inputs of the compaction scans (kept count, leaf primitive
 // count). With pre-split references (has_refs) an output leaf counts each triangle once: its
-// references are gathered depth-first and mapped to triangle ids, duplicates dropped.
+// references are gathered depth-first and mapped to triangle ids, duplicates dropped. Without
+// them, a working leaf's walk goes on to the node of more than max_leaf_size primitives and
+// finds where nodes_compact.wgsl writes its primitives: the output leaf that holds them (the
+// highest collapsing node on the way, or the leaf itself) and their position in its range, the
+// primitives of the left subtrees the walk climbed out of (depth-first order, left first), so
+// that no output leaf walks its subtree.
 #include "bvh_node.wgsl"
 #include "unfused.wgsl"
 
@@ -41,6 +46,9 @@ struct CollapseParams {
 // leaves. The dispatch covers 2·params.leaf_count - 1 nodes; the nodes past the tree's get zeros,
 // so that the scans over all of them give the tree's totals.
 @group(0) @binding(9) var<storage, read> count_limit: array<u32>;
+// Without references: per working leaf (at its first primitive's index), its output leaf and the
+// position of its first primitive in that leaf's range.
+@group(0) @binding(10) var<storage, read_write> leaf_slots: array<vec2<u32>>;
 
 #include "leaf_gather.wgsl"
 
@@ -68,24 +76,48 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     var kept = true;
+    let slotted = params.has_refs == 0u && (nodes[i].right_or_count & LEAF_FLAG) != 0u;
+    // The output leaf holding a working leaf's primitives and their position in its range.
+    var owner = i;
+    var position = 0u;
+    var before = 0u;
     // A node of more than max_leaf_size primitives is kept: so are its ancestors, which have more.
     var x = select(i, 0u, prim_counts[i] > params.max_leaf_size);
     while x != 0u {
+        let child = x;
         x = parents[x];
         if prim_counts[x] > params.max_leaf_size {
             break;
         }
+        if slotted {
+            let left = nodes[x].left_or_first;
+            if left != child {
+                before += prim_counts[left];
+            }
+        }
         if collapses(x) {
             kept = false;
-            break;
+            owner = x;
+            position = before;
+            if !slotted {
+                break;
+            }
         }
+    }
+    if slotted {
+        leaf_slots[nodes[i].left_or_first] = vec2<u32>(owner, position);
     }
     let leaf = kept && collapses(i);
     flags[i] = select(0u, 1u, kept) | select(0u, 2u, leaf);
     scans[i] = select(0u, 1u, kept);
     var prims = 0u;
     if leaf {
-        prims = select(prim_counts[i], gather_leaf(i), params.has_refs != 0u);
+        // Not a select: WGSL evaluates both of its arguments, and the gather walks the subtree.
+        if params.has_refs != 0u {
+            prims = gather_leaf(i);
+        } else {
+            prims = prim_counts[i];
+        }
     }
     scans[column_len + i] = prims;
 }

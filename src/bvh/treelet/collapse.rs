@@ -2,7 +2,9 @@
 //! nodes and output leaves (kernel `nodes_mark`), exclusive scans for new node indices and leaf
 //! primitive ranges (`sort::PrefixScan`, both columns in one dispatch, block-local: the
 //! compaction adds each block's offset where it reads), then write the output tree (kernel
-//! `nodes_compact`). Three dispatches. CPU twin: `WorkingTree::collapse`.
+//! `nodes_compact`; without pre-split references each working leaf writes its primitives where
+//! the mark found their slot in its output leaf). Three dispatches. CPU twin:
+//! `WorkingTree::collapse`.
 
 use super::dp::CostModel;
 use super::nodes_compact::{CompactParams, NODES_COMPACT};
@@ -18,6 +20,9 @@ pub(crate) struct CollapseBuffers<'a> {
     /// Two columns of 2n - 1 words: kept flags, then output leaves' primitive counts (scanned in
     /// place, block-local).
     pub scans: &'a wgpu::Buffer,
+    /// Without references, per working leaf (n pairs): the output leaf that holds its primitives
+    /// and where in its range (written by `nodes_mark`, read by `nodes_compact`).
+    pub leaf_slots: &'a wgpu::Buffer,
     pub out_nodes: &'a wgpu::Buffer,
     pub out_prims: &'a wgpu::Buffer,
     pub tree_counts: &'a wgpu::Buffer,
@@ -88,6 +93,7 @@ impl Collapse {
                 prims,
                 ref_tris,
                 count.limit(ctx),
+                out.leaf_slots,
             ],
         );
         self.scan
@@ -114,6 +120,7 @@ impl Collapse {
                 ref_tris,
                 self.scan.total(),
                 count.limit(ctx),
+                out.leaf_slots,
             ],
         );
         Ok(())

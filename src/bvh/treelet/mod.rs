@@ -211,6 +211,7 @@ struct Scratch {
     waves: wgpu::Buffer,
     flags: wgpu::Buffer,
     scans: wgpu::Buffer,
+    leaf_slots: wgpu::Buffer,
 }
 
 impl Scratch {
@@ -235,6 +236,7 @@ impl Scratch {
             waves: storage_buffer_zeroed(ctx, "treelet waves", u64::from(capacity) * 4)?,
             flags: storage_buffer_zeroed(ctx, "collapse flags", nodes * 4)?,
             scans: storage_buffer_zeroed(ctx, "collapse scans", 2 * nodes * 4)?,
+            leaf_slots: storage_buffer_zeroed(ctx, "collapse leaf slots", u64::from(capacity) * 8)?,
         })
     }
 }
@@ -471,6 +473,7 @@ impl TrbvhBuilder {
         let out = CollapseBuffers {
             flags: &scratch.flags,
             scans: &scratch.scans,
+            leaf_slots: &scratch.leaf_slots,
             out_nodes: &tree.nodes,
             out_prims: &tree.prim_indices,
             tree_counts: &tree.counts,

@@ -17,4 +17,4 @@ pub struct CompactParams {
 }
 
 kernel!(pub NODES_COMPACT: CompactParams = "nodes_compact"::"main", [64, 1, 1],
-    [Read, Read, Read, Read, Read, ReadWrite, ReadWrite, ReadWrite, Read, Read, Read]);
+    [Read, Read, Read, Read, Read, ReadWrite, ReadWrite, ReadWrite, Read, Read, Read, Read]);

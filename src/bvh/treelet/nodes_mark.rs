@@ -20,4 +20,4 @@ pub struct MarkParams {
 }
 
 kernel!(pub NODES_MARK: MarkParams = "nodes_mark"::"main", [64, 1, 1],
-    [Read, Read, Read, Read, ReadWrite, ReadWrite, Read, Read, Read]);
+    [Read, Read, Read, Read, ReadWrite, ReadWrite, Read, Read, Read, ReadWrite]);
