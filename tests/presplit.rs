@@ -19,6 +19,7 @@ use treelet::bvh::treelet::{
 use treelet::bvh::{sah_cost, validate_with_references, SahParams};
 use treelet::device::{Geometry, Tree};
 use treelet::geometry::Aabb;
+use treelet::gpu::constants::MAX_SPLITS;
 use treelet::scene::{load_scene, Triangle};
 use treelet::trace::closest_hits;
 
@@ -31,6 +32,22 @@ fn slivers() -> Vec<Triangle> {
             Vec3::new(-1.0, y, -1.0),
             Vec3::new(2.0, y + 0.01, 2.0),
             Vec3::new(2.0, y, 1.9),
+            0,
+        ));
+    }
+    tris
+}
+
+/// A few triangles spanning the scene diagonally among small ones: with a budget of 100 %, the
+/// large ones get the most splits a triangle can have (`MAX_SPLITS`), the deepest piece splitting.
+fn giants() -> Vec<Triangle> {
+    let mut tris = random_soup(1000, 9);
+    for i in 0..4 {
+        let z = i as f32 / 4.0;
+        tris.push(Triangle::new(
+            Vec3::new(-1.0, -1.0, z),
+            Vec3::new(2.0, 1.9, z + 0.5),
+            Vec3::new(1.8, 2.0, z + 0.3),
             0,
         ));
     }
@@ -240,16 +257,20 @@ fn a_device_rounding_divisions_differently_passes_the_agreement_check() {
 ///   CPU twin's bisection result from the same priorities (the GPU searches 16-ary);
 /// - priorities and pieces: within tolerances for at least `MIN_AGREEING` of the triangles, and
 ///   the pieces' total surface area within `PIECE_AREA_TOLERANCE`;
-/// - the pieces themselves: inside their triangle's box, covering it, and distinct.
+/// - the pieces themselves: inside their triangle's box, covering it, and distinct;
+/// - some triangle gets `MAX_SPLITS + 1` pieces (the kernel's piece stack at its deepest: a
+///   stack one entry short fails this test).
 #[test]
 fn gpu_split_agrees_with_cpu_twin() {
     let mut splitter = PreSplitter::new(gpu());
+    let mut most_pieces = 0;
     for (tris, percent) in [
         (slivers(), 30),
         (load_scene("field-10k").unwrap().triangles, 50),
         (load_scene("cornell").unwrap().triangles, 30),
         // Large budget: a search interval spanning many orders of magnitude.
         (load_scene("field-100k").unwrap().triangles, 30),
+        (giants(), 100),
     ] {
         let budget = split_budget(tris.len() as u32, percent);
         let scene = scene_of(tris.clone());
@@ -266,6 +287,8 @@ fn gpu_split_agrees_with_cpu_twin() {
         for (t, (&p, &q)) in pieces.iter().zip(q).enumerate() {
             assert_eq!(p, splits_at(e, q) + 1, "triangle {t}: pieces");
         }
+        most_pieces = most_pieces.max(pieces.iter().copied().max().unwrap_or(0));
+
         let used = |e: f32| -> u64 { q.iter().map(|&q| u64::from(splits_at(e, q))).sum() };
         assert!(used(e) <= u64::from(budget), "over budget");
         assert_eq!(
@@ -297,6 +320,12 @@ fn gpu_split_agrees_with_cpu_twin() {
             &disagreeing[..disagreeing.len().min(5)]
         );
     }
+    // The kernel's piece stack (`PIECE_STACK`) is exercised at its deepest.
+    assert_eq!(
+        most_pieces,
+        MAX_SPLITS + 1,
+        "no triangle got the most pieces"
+    );
 }
 
 #[test]
