@@ -258,8 +258,9 @@ fn a_device_rounding_divisions_differently_passes_the_agreement_check() {
 /// - priorities and pieces: within tolerances for at least `MIN_AGREEING` of the triangles, and
 ///   the pieces' total surface area within `PIECE_AREA_TOLERANCE`;
 /// - the pieces themselves: inside their triangle's box, covering it, and distinct;
-/// - some triangle gets `MAX_SPLITS + 1` pieces (the kernel's piece stack at its deepest: a
-///   stack one entry short fails this test).
+/// - some triangle gets `MAX_SPLITS + 1` pieces, the deepest splitting (the kernel's piece stack
+///   of `PIECE_STACK` = 5 entries, cut to 3, fails this test; the fifth entry is needed only when
+///   every cut shares the references evenly).
 #[test]
 fn gpu_split_agrees_with_cpu_twin() {
     let mut splitter = PreSplitter::new(gpu());
@@ -320,7 +321,7 @@ fn gpu_split_agrees_with_cpu_twin() {
             &disagreeing[..disagreeing.len().min(5)]
         );
     }
-    // The kernel's piece stack (`PIECE_STACK`) is exercised at its deepest.
+    // The deepest piece splitting was exercised.
     assert_eq!(
         most_pieces,
         MAX_SPLITS + 1,
