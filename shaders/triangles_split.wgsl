@@ -7,13 +7,14 @@
 // some devices, and the piece would then be "split" at its own side again, emitting copies of one
 // box). Each side is the box of the triangle's part on that side of the plane (its vertices
 // there and its edges' crossings of the plane) intersected with the piece box's side, as the
-// paper and SBVH's reference splits do: no polygon clipping, which cost lavapipe 3-4x the whole
-// kernel in private-array traffic (the side boxes are no tighter than the piece box allows, SAH
-// within 0.5 %; README, "Pre-splitting against SBVH"). The remaining pieces are shared by the
-// sides' extents in cells (integer arithmetic, rounded half up). A piece that cannot be split
-// (inside one grid cell, or a side left empty) is emitted as often as it still owes references,
-// so every triangle writes exactly its count. Writes the reference boxes and each reference's triangle, at the triangle's
-// scanned offset. CPU twin: `split_triangle`.
+// paper and SBVH's reference splits do. Clipping the triangle to each side box instead (a
+// polygon in a private array) made the kernel 3-4x slower on lavapipe for boxes that are tighter
+// only where the triangle reaches beyond the piece (SAH within 0.8 %; README, "Pre-splitting
+// against SBVH"). The remaining pieces are shared by the sides' extents in cells (integer
+// arithmetic, rounded half up). A piece that cannot be split (inside one grid cell, or a side
+// left empty) is emitted as often as it still owes references, so every triangle writes exactly
+// its count. Writes the reference boxes and each reference's triangle, at the triangle's scanned
+// offset. CPU twin: `split_triangle`.
 #include "bvh_node.wgsl"
 #include "aabb.wgsl"
 #include "items.wgsl"
@@ -38,7 +39,6 @@ fn first_reference(i: u32) -> u32 {
 }
 
 #include "split_grid.wgsl"
-
 
 struct Piece {
     lo: vec3<f32>,
