@@ -1,20 +1,21 @@
 #!/usr/bin/env bash
-# The treelet rounds' schedule on a lent GPU, in one `device` call: every combination of
-# --level-dispatches and --team-below (the same tree each time, tested), per scene, trbvh (7,3);
-# then lbvh and trbvh at each --climb-width.
+# The treelet rounds' schedule on a lent GPU, in one `device` call, per scene, trbvh (7,3): each
+# --treelet-dp at the default schedule, then every combination of --level-dispatches and
+# --team-below (the same tree each time, tested); then lbvh and trbvh at each --climb-width.
 # Here, first:   bash ../shared/gpu/pack.sh
 # Then `run` with carry [".gpu", ".gl"] and the command:   bash scripts/gpu-schedules.sh
 # JSON lines go to $OUT/schedules.jsonl and $OUT/climbs.jsonl; a table of the climb widths, then
 # one of build ms and the two treelet stages, fastest first per scene, are printed last. SCENES,
-# LEVELS, TEAMS, CLIMBS and REPEATS override the sweep; with TREELET
+# LEVELS, TEAMS, DPS, CLIMBS and REPEATS override the sweep; with TREELET
 # set to a treelet binary it runs that one here instead (a dry run on lavapipe:
 # TREELET=target/release/treelet SCENES=field:100 LEVELS=0,4 TEAMS=0,64 REPEATS=1 bash scripts/gpu-schedules.sh).
 set -u
 . scripts/gpu-env.sh
 : > "$out/schedules.jsonl"
 for s in ${SCENES:-conference sibenik field:707}; do
-  # The default schedule first (no options), then the sweep.
-  for opts in "" "--level-dispatches ${LEVELS:-0,8,10,12,14,16,18,20} --team-below ${TEAMS:-0,64,512}"; do
+  # The default schedule first (no options), then the DP's forms, then the sweep.
+  for opts in "" "--treelet-dp ${DPS:-unrolled,loop}" \
+      "--level-dispatches ${LEVELS:-0,8,10,12,14,16,18,20} --team-below ${TEAMS:-0,64,512}"; do
     # shellcheck disable=SC2086
     timeout 200 "$bin" bench --scene "$s" --builder trbvh $opts --width 64 --height 64 --spp 1 \
       --repeats "${REPEATS:-11}" >> "$out/schedules.jsonl" 2>> "$out/schedules.log" \
@@ -43,13 +44,14 @@ PY
 python3 - "$out/schedules.jsonl" <<'PY'
 import json, sys
 rows = [json.loads(l) for l in open(sys.argv[1]) if l.startswith("{")]
-print("scene            levels  team_below  build ms  treelets ms  climb ms  dispatches  sah")
+print("scene            levels  team_below  dp        build ms  treelets ms  climb ms  dispatches  sah")
 for scene in dict.fromkeys(r["scene"] for r in rows):
     runs = sorted((r for r in rows if r["scene"] == scene), key=lambda r: r["build_ms"])
     for r in runs:
         st = r["stages_ms"]
         levels = "auto" if r["level_dispatches"] is None else r["level_dispatches"]
-        print(f"{scene[-16:]:16} {levels:>6} {r['team_below']:>11} {r['build_ms']:9.3f}"
+        print(f"{scene[-16:]:16} {levels:>6} {r['team_below']:>11} {r['treelet_dp']:9}"
+              f" {r['build_ms']:9.3f}"
               f" {st.get('treelets') or 0:12.3f} {st.get('treelets climb') or 0:9.3f}"
               f" {r['dispatches']:11} {r['sah']:.4f}")
 PY

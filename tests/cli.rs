@@ -209,6 +209,21 @@ fn bench_compares_round_schedules_on_the_same_tree() {
     }
 }
 
+/// `bench --treelet-dp unrolled,loop` measures trbvh once per DP form and reports it; both build
+/// the same tree.
+#[test]
+fn bench_compares_dp_forms_on_the_same_tree() {
+    let records = quick_bench("trbvh", &["--treelet-dp", "unrolled,loop"]);
+    let forms: Vec<_> = records
+        .iter()
+        .map(|r| r["treelet_dp"].as_str().unwrap().to_owned())
+        .collect();
+    assert_eq!(forms, ["unrolled", "loop"]);
+    assert_eq!(records[1]["valid"], true);
+    assert_eq!(records[1]["sah"], records[0]["sah"]);
+    assert_eq!(records[1]["nodes"], records[0]["nodes"]);
+}
+
 /// `bench --sort-tile-items` sorts in tiles of 2048, 4096 or 8192 keys; every tile builds the
 /// same trees, and other values are refused.
 #[test]
@@ -437,6 +452,14 @@ fn options_of_other_builders_are_refused() {
     assert_clean_failure(
         &["bench", "--builder", "lbvh", "--team-below", "64"],
         "--team-below does not apply to builder lbvh: only trbvh and trbvh-split have treelets",
+    );
+    assert_clean_failure(
+        &["bench", "--builder", "lbvh", "--treelet-dp", "loop"],
+        "--treelet-dp does not apply to builder lbvh",
+    );
+    assert_clean_failure(
+        &["bench", "--builder", "trbvh", "--treelet-dp", "recursive"],
+        "invalid value 'recursive' for '--treelet-dp",
     );
     assert_clean_failure(
         &["bench", "--builder", "trbvh", "--split-budget", "0.3"],

@@ -12,7 +12,8 @@ use rand::Rng;
 use treelet::bvh::lbvh::{build_lbvh_from_boxes_cpu, prim_boxes_cpu, TRBVH_KEY_BITS};
 use treelet::bvh::treelet::{
     build_trbvh_cpu, optimize_lbvh_cpu, solve_treelet, subsets_by_size, surface_area, CostModel,
-    RoundSchedule, TrbvhBuilder, TreeletLeaf, TreeletSettings, WorkingTree, MAX_LEVEL_DISPATCHES,
+    RoundSchedule, TrbvhBuilder, TreeletDp, TreeletLeaf, TreeletSettings, WorkingTree,
+    MAX_LEVEL_DISPATCHES,
 };
 use treelet::bvh::{sah_cost, validate, Bvh, SahParams};
 use treelet::device::{Geometry, Tree};
@@ -374,7 +375,7 @@ fn every_level_schedule_agrees_with_the_cpu_twin() {
     for levels in [0, 1, 3, MAX_LEVEL_DISPATCHES] {
         builder.set_schedule(RoundSchedule {
             level_dispatches: Some(levels),
-            team_below: None,
+            ..RoundSchedule::default()
         });
         println!("{levels} level dispatches");
         check_gpu_against_cpu(builder, random_soup(3000, 44), TreeletSettings::BALANCED);
@@ -412,11 +413,12 @@ fn subsets_by_size_puts_each_treelet_size_first() {
 }
 
 /// Teams of invocations (a level's treelets each optimized by a workgroup) and lone invocations
-/// (a treelet each) build the same tree: every treelet size (3-8: subsets of one size in one or
-/// several turns of the team, one to 32 lanes per subset), dispatched and climbed levels, against
-/// each other exactly (the same operations from the same inputs) and against the CPU twin.
+/// (a treelet each), with the DP written out or as loops, build the same tree: every treelet size
+/// (3-8: subsets of one size in one or several turns of the team, one to 32 lanes per subset),
+/// dispatched and climbed levels, against each other exactly (the same operations from the same
+/// inputs) and against the CPU twin.
 #[test]
-fn teams_and_lone_invocations_build_the_same_tree() {
+fn teams_lone_invocations_and_dp_forms_build_the_same_tree() {
     let builder =
         &mut TrbvhBuilder::new(gpu(), TreeletSettings::BALANCED, SahParams::default()).unwrap();
     let scene = scene_of(random_soup(3000, 45));
@@ -429,19 +431,28 @@ fn teams_and_lone_invocations_build_the_same_tree() {
         };
         builder.settings = settings;
         for levels in [None, Some(0)] {
+            // The loop form with the default schedule only (it dispatches the low levels and
+            // climbs the top ones): on lavapipe, climbing every level with it takes minutes.
+            let mut variants = vec![(0, TreeletDp::Unrolled), (u32::MAX, TreeletDp::Unrolled)];
+            if levels.is_none() {
+                variants.push((0, TreeletDp::Loop));
+            }
             let mut trees = Vec::new();
-            for below in [0, u32::MAX] {
+            for &(below, dp) in &variants {
                 builder.set_schedule(RoundSchedule {
                     level_dispatches: levels,
                     team_below: Some(below),
+                    dp: Some(dp),
                 });
                 trees.push(builder.build_stages(gpu(), &geometry).unwrap());
             }
-            assert!(
-                trees[0].working == trees[1].working,
-                "treelet size {treelet_size}, level dispatches {levels:?}: teams and lone \
-                 invocations differ"
-            );
+            for (tree, (below, dp)) in trees.iter().zip(&variants).skip(1) {
+                assert!(
+                    tree.working == trees[0].working,
+                    "treelet size {treelet_size}, level dispatches {levels:?}: teams below \
+                     {below} with the DP {dp:?} differ from lone invocations, DP written out"
+                );
+            }
             let model = CostModel::from(&builder.sah);
             let cpu = optimize_lbvh_cpu(trees[1].lbvh.clone(), &settings, &model);
             assert_optimizer_agrees(&trees[1].working, &cpu, &builder.sah);

@@ -32,6 +32,10 @@
 
 // Leaves per treelet, fixed per pipeline (`bvh::treelet`; MIN_TREELET_SIZE..=MAX_TREELET).
 override TREELET_SIZE: u32;
+// 1: the generated `subset_costs()` is the loop form, else written out for TREELET_SIZE
+// (`bvh::treelet::dp_unrolled` reads it when it generates the include; the code has no use
+// for it).
+override TREELET_DP_LOOP: u32 = 0u;
 
 // Subsets 1 ..= 2^MAX_TREELET - 2 (the full set is never stored).
 const DP_SLOTS: u32 = (1u << MAX_TREELET) - 2u;

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 use serde::Serialize;
 use treelet::anim::load_still;
-use treelet::bvh::treelet::{RoundSchedule, MAX_LEVEL_DISPATCHES};
+use treelet::bvh::treelet::{RoundSchedule, TreeletDp, MAX_LEVEL_DISPATCHES};
 use treelet::bvh::wide::{
     validate_wide, validate_wide_with_references, wide_sah_costs, Layout, WideBvh,
 };
@@ -60,6 +60,11 @@ pub struct BenchArgs {
     /// comma-separated list to compare. The tree is the same for every value
     #[arg(long, value_delimiter = ',')]
     team_below: Vec<u32>,
+    /// How a lone invocation writes the treelet DP: unrolled (every subset and partition written
+    /// out; the default) or loop (trbvh, trbvh-split); a comma-separated list to compare. The
+    /// tree is the same for both
+    #[arg(long, value_delimiter = ',', value_enum)]
+    treelet_dp: Vec<DpForm>,
     /// Time every dispatch on its own (each in a compute pass of its own, which may cost a little
     /// more than the passes of a normal build) and list them in `dispatch_ms`
     #[arg(long)]
@@ -87,6 +92,22 @@ enum WideCollapse {
     Optimal,
 }
 
+/// `bench --treelet-dp`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum DpForm {
+    Unrolled,
+    Loop,
+}
+
+impl From<DpForm> for TreeletDp {
+    fn from(form: DpForm) -> Self {
+        match form {
+            DpForm::Unrolled => TreeletDp::Unrolled,
+            DpForm::Loop => TreeletDp::Loop,
+        }
+    }
+}
+
 impl BenchArgs {
     /// Every combination of the requested round schedules (the default where none is given);
     /// fails when one is given but no builder has treelets to schedule.
@@ -96,6 +117,7 @@ impl BenchArgs {
             &[
                 ("--level-dispatches", !self.level_dispatches.is_empty()),
                 ("--team-below", !self.team_below.is_empty()),
+                ("--treelet-dp", !self.treelet_dp.is_empty()),
             ],
         )?;
         let or_default = |values: &[u32]| -> Vec<Option<u32>> {
@@ -105,16 +127,24 @@ impl BenchArgs {
                 values.iter().copied().map(Some).collect()
             }
         };
-        let teams = or_default(&self.team_below);
-        Ok(or_default(&self.level_dispatches)
-            .into_iter()
-            .flat_map(|level_dispatches| {
-                teams.iter().map(move |&team_below| RoundSchedule {
-                    level_dispatches,
-                    team_below,
-                })
-            })
-            .collect())
+        let forms: Vec<Option<TreeletDp>> = if self.treelet_dp.is_empty() {
+            vec![None]
+        } else {
+            self.treelet_dp.iter().map(|&f| Some(f.into())).collect()
+        };
+        let mut schedules = Vec::new();
+        for level_dispatches in or_default(&self.level_dispatches) {
+            for team_below in or_default(&self.team_below) {
+                for &dp in &forms {
+                    schedules.push(RoundSchedule {
+                        level_dispatches,
+                        team_below,
+                        dp,
+                    });
+                }
+            }
+        }
+        Ok(schedules)
     }
 }
 
@@ -142,6 +172,8 @@ struct BenchRecord {
     /// round) and the team threshold in effect.
     level_dispatches: Option<u32>,
     team_below: Option<u32>,
+    /// Treelet builders: the lone invocation's DP form in effect (`--treelet-dp`).
+    treelet_dp: Option<&'static str>,
     /// The radix sort's keys per invocation asked for (null: chosen per sort).
     sort_tile_items: Option<u32>,
     /// The climbs' workgroup width in effect.
@@ -343,6 +375,7 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
                 .map(|s| f64::from(s.split_percent) / 100.0),
             level_dispatches: schedule.level_dispatches,
             team_below: builder.treelet_settings().map(|_| schedule.team_below()),
+            treelet_dp: builder.treelet_settings().map(|_| schedule.dp().name()),
             sort_tile_items: gpu.sort_tile_items,
             climb_width: gpu.climb_width(),
             adapter: gpu.adapter_description(),
@@ -404,6 +437,9 @@ fn run_label(builder: Builder, schedule: RoundSchedule, layout: Layout) -> Strin
     }
     if let Some(below) = schedule.team_below {
         label += &format!(" t={below}");
+    }
+    if let Some(dp) = schedule.dp {
+        label += &format!(" dp={}", dp.name());
     }
     format!("{label} {}", layout.name())
 }

@@ -29,6 +29,7 @@ pub use nodes_mark::NODES_MARK;
 pub use treelets_climb::TREELETS_CLIMB;
 pub use treelets_optimize::TREELETS_OPTIMIZE;
 
+pub use dp_unrolled::TreeletDp;
 pub use rounds::RoundSchedule;
 
 pub use crate::gpu::constants::{

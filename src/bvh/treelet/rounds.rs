@@ -18,14 +18,15 @@
 //! tree has 20-40 levels per round, each waiting for the one before); measured, teams paid
 //! neither on lavapipe nor on an H200. Both find the same topology (same operations, same
 //! tie-breaking). The treelet size is a pipeline constant: the treelet kernels are compiled per
-//! size when first used, the lone DP written out for it (`dp_unrolled`).
+//! size when first used, the lone DP written out for it (`dp_unrolled`), or as loops on request
+//! (`RoundSchedule::dp`, for GPUs to compare; the same tree).
 
 use std::sync::OnceLock;
 
 use bytemuck::{Pod, Zeroable};
 
 use super::dp::{subsets_by_size, CostModel};
-use super::dp_unrolled::TREELET_SIZE_OVERRIDE;
+use super::dp_unrolled::{TreeletDp, TREELET_DP_LOOP_OVERRIDE, TREELET_SIZE_OVERRIDE};
 use super::nodes_level::NODES_LEVEL;
 use super::treelets_climb::TREELETS_CLIMB;
 use super::treelets_optimize::TREELETS_OPTIMIZE;
@@ -152,12 +153,19 @@ pub struct RoundSchedule {
     /// for every level and every climbed wave of fewer than 32 treelets. None:
     /// `DEFAULT_TEAM_BELOW` (never).
     pub team_below: Option<u32>,
+    /// How a lone invocation's DP is written (`TreeletDp`); None: written out.
+    pub dp: Option<TreeletDp>,
 }
 
 impl RoundSchedule {
     /// The team threshold in effect.
     pub fn team_below(&self) -> u32 {
         self.team_below.unwrap_or(DEFAULT_TEAM_BELOW)
+    }
+
+    /// The DP form in effect.
+    pub fn dp(&self) -> TreeletDp {
+        self.dp.unwrap_or_default()
     }
 }
 
@@ -172,16 +180,19 @@ const DEFAULT_TEAM_BELOW: u32 = 0;
 /// Treelet sizes with kernels of their own, MIN_TREELET_SIZE..=MAX_TREELET_SIZE.
 const TREELET_SIZES: usize = (MAX_TREELET_SIZE - MIN_TREELET_SIZE + 1) as usize;
 
-/// The treelet kernels of one treelet size (the WGSL override `TREELET_SIZE`, which selects the
-/// written-out DP of that size: `dp_unrolled`).
+/// The treelet kernels of one treelet size and DP form (the WGSL overrides `TREELET_SIZE` and
+/// `TREELET_DP_LOOP`, which select the generated DP: `dp_unrolled`).
 struct TreeletKernels {
     optimize: Kernel<RoundParams>,
     climb: Kernel<RoundParams>,
 }
 
 impl TreeletKernels {
-    fn new(ctx: &GpuContext, treelet_size: u32) -> Self {
-        let overrides = &[(TREELET_SIZE_OVERRIDE, f64::from(treelet_size))];
+    fn new(ctx: &GpuContext, treelet_size: u32, dp: TreeletDp) -> Self {
+        let overrides = &[
+            (TREELET_SIZE_OVERRIDE, f64::from(treelet_size)),
+            (TREELET_DP_LOOP_OVERRIDE, dp.override_value()),
+        ];
         Self {
             optimize: Kernel::with_overrides(ctx, &TREELETS_OPTIMIZE, overrides),
             climb: Kernel::with_overrides(ctx, &TREELETS_CLIMB, overrides),
@@ -196,8 +207,9 @@ pub(crate) struct TreeletRounds {
     /// the declared width).
     climb_level: Kernel<RoundParams>,
     level: Kernel<RoundParams>,
-    /// Per treelet size from MIN_TREELET_SIZE, compiled when first used.
-    treelet_kernels: [OnceLock<TreeletKernels>; TREELET_SIZES],
+    /// Per treelet size from MIN_TREELET_SIZE and DP form (`TreeletDp::ALL`), compiled when
+    /// first used.
+    treelet_kernels: [[OnceLock<TreeletKernels>; 2]; TREELET_SIZES],
     /// `subsets_by_size`, read by the teams.
     subsets: wgpu::Buffer,
     /// The roots of the dispatched levels and the first climbed one, each level in its slots
@@ -311,8 +323,13 @@ impl TreeletRounds {
         if round.gamma == u32::MAX {
             return;
         }
-        let kernels = self.treelet_kernels[(round.treelet_size - MIN_TREELET_SIZE) as usize]
-            .get_or_init(|| TreeletKernels::new(ctx, round.treelet_size));
+        let dp = self.schedule.dp();
+        let form = TreeletDp::ALL
+            .iter()
+            .position(|&f| f == dp)
+            .expect("every form is in ALL");
+        let kernels = self.treelet_kernels[(round.treelet_size - MIN_TREELET_SIZE) as usize][form]
+            .get_or_init(|| TreeletKernels::new(ctx, round.treelet_size, dp));
         let treelet_buffers = [
             state.nodes,
             state.parents,
