@@ -437,34 +437,39 @@ fn overflowing_triangles_are_reported_as_such() {
 
 #[test]
 fn options_of_other_builders_are_refused() {
-    assert_clean_failure(
-        &["render", "--builder", "sweep", "--treelet-size", "99"],
-        "--treelet-size does not apply to builder sweep",
-    );
-    assert_clean_failure(
-        &["bench", "--builder", "lbvh,sbvh", "--rounds", "2"],
-        "--rounds does not apply to builder lbvh, sbvh",
-    );
-    assert_clean_failure(
-        &["render", "--builder", "lbvh", "--preset", "fast"],
-        "--preset does not apply",
-    );
-    assert_clean_failure(
-        &["bench", "--builder", "lbvh", "--team-below", "64"],
-        "--team-below does not apply to builder lbvh: only trbvh and trbvh-split have treelets",
-    );
-    assert_clean_failure(
-        &["bench", "--builder", "lbvh", "--treelet-dp", "loop"],
-        "--treelet-dp does not apply to builder lbvh",
-    );
-    assert_clean_failure(
-        &["bench", "--builder", "trbvh", "--treelet-dp", "recursive"],
-        "invalid value 'recursive' for '--treelet-dp",
-    );
-    assert_clean_failure(
-        &["bench", "--builder", "trbvh", "--split-budget", "0.3"],
-        "--split-budget does not apply to builder trbvh",
-    );
+    let cases: [(&[&str], &str); 7] = [
+        (
+            &["render", "--builder", "sweep", "--treelet-size", "99"],
+            "--treelet-size does not apply to builder sweep",
+        ),
+        (
+            &["bench", "--builder", "lbvh,sbvh", "--rounds", "2"],
+            "--rounds does not apply to builder lbvh, sbvh",
+        ),
+        (
+            &["render", "--builder", "lbvh", "--preset", "fast"],
+            "--preset does not apply",
+        ),
+        (
+            &["bench", "--builder", "lbvh", "--team-below", "64"],
+            "--team-below does not apply to builder lbvh: only trbvh and trbvh-split have treelets",
+        ),
+        (
+            &["bench", "--builder", "lbvh", "--treelet-dp", "loop"],
+            "--treelet-dp does not apply to builder lbvh",
+        ),
+        (
+            &["bench", "--builder", "trbvh", "--treelet-dp", "recursive"],
+            "invalid value 'recursive' for '--treelet-dp",
+        ),
+        (
+            &["bench", "--builder", "trbvh", "--split-budget", "0.3"],
+            "--split-budget does not apply to builder trbvh",
+        ),
+    ];
+    for (args, message) in cases {
+        assert_clean_failure(args, message);
+    }
 }
 
 /// `bench --export-bvh` writes each builder's tree; `bvh::read_bvh` reads it back as a valid tree
