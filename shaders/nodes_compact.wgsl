@@ -1,10 +1,10 @@
 // Leaf collapse, step 2: compaction into the traversal layout. After exclusive scans of the kept
 // flags (new node indices; the root stays 0) and of the output leaves' primitive counts (first
 // entry of each leaf's range), one invocation per kept node writes its output node. An output
-// leaf's range holds the primitives of its working subtree in depth-first order (left first):
-// without pre-split references, each working leaf writes its own where nodes_mark.wgsl found
-// (`leaf_slots`); with them, the output leaf gathers them as unique triangle ids. Invocation 0
-// also writes the output's node and primitive counts.
+// leaf's range holds the primitives of its working subtree in depth-first order (left first), as
+// unique triangle ids when they are pre-split references: each working leaf writes its own where
+// nodes_mark.wgsl found (`leaf_slots`), no subtree is walked. Invocation 0 also writes the
+// output's node and primitive counts.
 #include "bvh_node.wgsl"
 
 struct CompactParams {
@@ -34,10 +34,10 @@ struct CompactParams {
 // The item count's limit (`gpu::ItemCount`): the tree has min(params.leaf_count, count_limit[0])
 // leaves.
 @group(0) @binding(11) var<storage, read> count_limit: array<u32>;
-// Without references: per working leaf, its output leaf and its position there (nodes_mark.wgsl).
+// Per working leaf, its output leaf and its position there (NO_SLOT: none; nodes_mark.wgsl).
 @group(0) @binding(12) var<storage, read> leaf_slots: array<vec2<u32>>;
 
-#include "leaf_gather.wgsl"
+const NO_SLOT: u32 = 0xffffffffu;
 
 const KEPT: u32 = 0u;
 const LEAF_PRIMS: u32 = 1u;
@@ -61,12 +61,17 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let node = nodes[i];
-    let is_working_leaf = (node.right_or_count & LEAF_FLAG) != 0u;
-    if params.has_refs == 0u && is_working_leaf {
+    if (node.right_or_count & LEAF_FLAG) != 0u {
         let slot = leaf_slots[node.left_or_first];
-        let at = scanned(LEAF_PRIMS, slot.x) + slot.y;
-        for (var k = 0u; k < (node.right_or_count & ~LEAF_FLAG); k++) {
-            out_prims[at + k] = prim_indices[node.left_or_first + k];
+        if slot.y != NO_SLOT {
+            let at = scanned(LEAF_PRIMS, slot.x) + slot.y;
+            for (var k = 0u; k < (node.right_or_count & ~LEAF_FLAG); k++) {
+                var prim = prim_indices[node.left_or_first + k];
+                if params.has_refs != 0u {
+                    prim = ref_tris[prim];
+                }
+                out_prims[at + k] = prim;
+            }
         }
     }
     let flag = flags[i];
@@ -76,20 +81,11 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let out = scanned(KEPT, i);
     if (flag & 2u) != 0u {
         let first = scanned(LEAF_PRIMS, i);
-        var count = 0u;
-        if params.has_refs != 0u {
-            count = gather_leaf(i);
-            for (var k = 0u; k < count; k++) {
-                out_prims[first + k] = gathered[k];
-            }
-        } else {
-            // The next node's scanned entry (the total after the last node: the nodes past the
-            // tree add nothing).
-            let len = 2u * params.leaf_count - 1u;
-            let next = select(totals[LEAF_PRIMS], scanned(LEAF_PRIMS, min(i + 1u, len - 1u)), i + 1u < len);
-            count = next - first;
-        }
-        out_nodes[out] = BvhNode(node.min, first, node.max, LEAF_FLAG | count);
+        // The next node's scanned entry (the total after the last node: the nodes past the tree
+        // add nothing).
+        let len = 2u * params.leaf_count - 1u;
+        let next = select(totals[LEAF_PRIMS], scanned(LEAF_PRIMS, min(i + 1u, len - 1u)), i + 1u < len);
+        out_nodes[out] = BvhNode(node.min, first, node.max, LEAF_FLAG | (next - first));
     } else {
         out_nodes[out] = BvhNode(node.min, scanned(KEPT, node.left_or_first), node.max, scanned(KEPT, node.right_or_count));
     }

@@ -7,13 +7,16 @@
 // than max_leaf_size primitives: no ancestor from there up can collapse (counts grow upwards), so
 // the walk takes at most max_leaf_size steps instead of the node's depth. Writes flags (bit 0
 // kept, bit 1 output leaf) and the two inputs of the compaction scans (kept count, leaf primitive
-// count). With pre-split references (has_refs) an output leaf counts each triangle once: its
-// references are gathered depth-first and mapped to triangle ids, duplicates dropped. Without
-// them, a working leaf's walk goes on to the node of more than max_leaf_size primitives and
-// finds where nodes_compact.wgsl writes its primitives: the output leaf that holds them (the
-// highest collapsing node on the way, or the leaf itself) and their position in its range, the
-// primitives of the left subtrees the walk climbed out of (depth-first order, left first), so
-// that no output leaf walks its subtree.
+// count), and where nodes_compact.wgsl writes each working leaf's primitive (`leaf_slots`: the
+// output leaf that holds it and its position in that leaf's range), so that compaction walks no
+// subtree:
+// - without pre-split references, a working leaf's walk goes on to the node of more than
+//   max_leaf_size primitives: its output leaf is the highest collapsing node on the way (or the
+//   leaf itself), its position the primitives of the left subtrees it climbed out of
+//   (depth-first order, left first);
+// - with them, an output leaf counts each triangle once: its invocation walks its subtree
+//   depth-first, maps the references to triangle ids and gives each its slot, the first
+//   occurrence of a triangle the next position, a repeat none (NO_SLOT).
 #include "bvh_node.wgsl"
 #include "unfused.wgsl"
 
@@ -46,11 +49,50 @@ struct CollapseParams {
 // leaves. The dispatch covers 2·params.leaf_count - 1 nodes; the nodes past the tree's get zeros,
 // so that the scans over all of them give the tree's totals.
 @group(0) @binding(9) var<storage, read> count_limit: array<u32>;
-// Without references: per working leaf (at its first primitive's index), its output leaf and the
-// position of its first primitive in that leaf's range.
+// Per working leaf (at its first primitive's index): its output leaf and the position of its
+// first primitive in that leaf's range (NO_SLOT: a repeated triangle, not written).
 @group(0) @binding(10) var<storage, read_write> leaf_slots: array<vec2<u32>>;
 
-#include "leaf_gather.wgsl"
+const NO_SLOT: u32 = 0xffffffffu;
+
+// The stack holds disjoint subtrees of the output leaf's, each of at least one reference.
+const GATHER_STACK: u32 = MAX_GPU_LEAF_SIZE;
+
+// With references: the triangles under output leaf `root` depth-first (left first), each once;
+// stores each working leaf's slot and returns the number of triangles. Working leaves hold one
+// reference each (the LBVH's leaves, which the rounds keep), output leaves at most
+// MAX_GPU_LEAF_SIZE (the collapse's max leaf size limit).
+fn gather_references(root: u32) -> u32 {
+    var triangles: array<u32, MAX_GPU_LEAF_SIZE>;
+    var count = 0u;
+    var stack: array<u32, GATHER_STACK>;
+    var sp = 1u;
+    stack[0] = root;
+    while sp > 0u {
+        sp--;
+        let n = nodes[stack[sp]];
+        if (n.right_or_count & LEAF_FLAG) != 0u {
+            let triangle = ref_tris[prim_indices[n.left_or_first]];
+            var fresh = count < MAX_GPU_LEAF_SIZE;
+            for (var j = 0u; j < count; j++) {
+                fresh = fresh && triangles[j] != triangle;
+            }
+            var slot = NO_SLOT;
+            if fresh {
+                triangles[count] = triangle;
+                slot = count;
+                count++;
+            }
+            leaf_slots[n.left_or_first] = vec2<u32>(root, slot);
+        } else if sp + 2u <= GATHER_STACK {
+            // Right first on the stack, so the left subtree is gathered first.
+            stack[sp] = n.right_or_count;
+            stack[sp + 1u] = n.left_or_first;
+            sp += 2u;
+        }
+    }
+    return count;
+}
 
 fn collapses(node: u32) -> bool {
     let b = nodes[node];
@@ -114,7 +156,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if leaf {
         // Not a select: WGSL evaluates both of its arguments, and the gather walks the subtree.
         if params.has_refs != 0u {
-            prims = gather_leaf(i);
+            prims = gather_references(i);
         } else {
             prims = prim_counts[i];
         }

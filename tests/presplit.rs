@@ -14,7 +14,7 @@ use treelet::bvh::presplit::{
     splits_at, PreSplitter, SplitGrid,
 };
 use treelet::bvh::treelet::{
-    build_trbvh_cpu, build_trbvh_split_cpu, TrbvhBuilder, TreeletSettings,
+    build_trbvh_cpu, build_trbvh_split_cpu, CostModel, TrbvhBuilder, TreeletSettings,
 };
 use treelet::bvh::{sah_cost, validate_with_references, SahParams};
 use treelet::device::{Geometry, Tree};
@@ -366,6 +366,18 @@ fn trbvh_split_trees_are_valid_and_hits_equal_brute_force() {
         let plain: Vec<_> = rays.iter().map(|(_, r)| *r).collect();
         let hits = closest_hits(gpu(), &geometry, &tree, &plain).unwrap();
         assert_hits_match(&scene.triangles, &rays, &hits);
+        // The GPU collapse of the GPU's own working tree equals the CPU twin's exactly: unique
+        // triangles per leaf, in depth-first order of first occurrence.
+        let stages = builder.build_stages(gpu(), &geometry).unwrap();
+        let ref_tris = stages.ref_tris.as_deref().expect("pre-split references");
+        assert_eq!(
+            stages.bvh,
+            stages
+                .working
+                .collapse(&CostModel::from(&sah), Some(ref_tris)),
+            "{}: collapsed tree",
+            scene.name
+        );
     }
 }
 

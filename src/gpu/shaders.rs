@@ -65,10 +65,6 @@ const INCLUDES: &[(&str, &str)] = &[
         include_str!("../../shaders/include/items.wgsl"),
     ),
     (
-        "leaf_gather.wgsl",
-        include_str!("../../shaders/include/leaf_gather.wgsl"),
-    ),
-    (
         "treelet_round.wgsl",
         include_str!("../../shaders/include/treelet_round.wgsl"),
     ),

@@ -2,9 +2,9 @@
 //! nodes and output leaves (kernel `nodes_mark`), exclusive scans for new node indices and leaf
 //! primitive ranges (`sort::PrefixScan`, both columns in one dispatch, block-local: the
 //! compaction adds each block's offset where it reads), then write the output tree (kernel
-//! `nodes_compact`; without pre-split references each working leaf writes its primitives where
-//! the mark found their slot in its output leaf). Three dispatches. CPU twin:
-//! `WorkingTree::collapse`.
+//! `nodes_compact`: each working leaf writes its primitive, or its triangle once per leaf with
+//! pre-split references, where the mark found its slot in its output leaf). Three dispatches. CPU
+//! twin: `WorkingTree::collapse`.
 
 use super::dp::CostModel;
 use super::nodes_compact::{CompactParams, NODES_COMPACT};
@@ -20,8 +20,8 @@ pub(crate) struct CollapseBuffers<'a> {
     /// Two columns of 2n - 1 words: kept flags, then output leaves' primitive counts (scanned in
     /// place, block-local).
     pub scans: &'a wgpu::Buffer,
-    /// Without references, per working leaf (n pairs): the output leaf that holds its primitives
-    /// and where in its range (written by `nodes_mark`, read by `nodes_compact`).
+    /// Per working leaf (n pairs): the output leaf that holds its primitive and where in its
+    /// range, none for a repeated triangle (written by `nodes_mark`, read by `nodes_compact`).
     pub leaf_slots: &'a wgpu::Buffer,
     pub out_nodes: &'a wgpu::Buffer,
     pub out_prims: &'a wgpu::Buffer,

@@ -249,6 +249,8 @@ pub struct TrbvhStages {
     pub lbvh: WorkingTree,
     pub working: WorkingTree,
     pub bvh: Bvh,
+    /// With pre-splitting, the triangle of each reference (the working tree's primitives).
+    pub ref_tris: Option<Vec<u32>>,
 }
 
 /// GPU TRBVH builder: LBVH + treelet rounds + collapse, kernels and scratch reused per frame.
@@ -336,10 +338,18 @@ impl TrbvhBuilder {
         rec.submit();
         let lbvh = trees.take().expect("requested");
         let working = self.read_working(ctx)?;
+        let ref_tris = match (&self.presplit, self.last_split) {
+            (Some(splitter), true) => splitter
+                .ref_tris()
+                .map(|buffer| read_buffer(ctx, buffer, working.prims.len()))
+                .transpose()?,
+            _ => None,
+        };
         Ok(TrbvhStages {
             lbvh,
             working,
             bvh: tree.download(ctx)?,
+            ref_tris,
         })
     }
 
