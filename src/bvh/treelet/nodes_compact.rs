@@ -1,6 +1,6 @@
 //! Leaf collapse step 2 (kernel `nodes_compact`; Karras & Aila 2013, §3): the kept nodes written
-//! in the traversal layout at their scanned indices, each output leaf gathering its subtree's
-//! primitives into its scanned range.
+//! in the traversal layout at their scanned indices, each working leaf's primitive (or triangle)
+//! at its slot in its output leaf's scanned range.
 
 use bytemuck::{Pod, Zeroable};
 
