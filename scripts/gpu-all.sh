@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Everything a lent GPU is asked to measure, in one `device` call that fits a short lease: the
-# test binaries, the round schedule sweep (levels dispatched, LEVELS; team threshold, TEAMS),
-# build scaling, the binary-vs-wide table and every dispatch timed, in that order, each step
+# test binaries, the round schedule sweep (levels dispatched, LEVELS; team threshold, TEAMS; the
+# DP's forms), build scaling, the binary-vs-wide table, every dispatch of lbvh timed per sort tile
+# and every dispatch of trbvh and trbvh-split timed ("kernels"), in that order, each step
 # capped so that the whole run ends within BUDGET seconds (default 500; STEPS picks some of the
 # steps, e.g. STEPS="tests schedules"). After every step the results so far are packed into
 # $OUT/results.tar.gz, so a call stopped at its limit still brings back what ran. A summary is
@@ -25,7 +26,7 @@ save() { tar -C $res -czf "$final/results.tar.gz" .; }
 step() {
   local name=$1 cap=$2 left
   shift 2
-  case " ${STEPS:-tests schedules scaling layouts profile} " in
+  case " ${STEPS:-tests schedules scaling layouts profile kernels} " in
     *" $name "*) ;;
     *) return ;;
   esac
@@ -87,6 +88,9 @@ step layouts 70 env SCENES="conference crytek_sponza sibenik lost_empire armadil
   REPEATS=11 bash scripts/gpu-layouts.sh
 step profile 60 env SCENES="conference field:707 field:2000" TILES="default 8 16 32" BUILDERS=lbvh \
   REPEATS=5 bash scripts/gpu-profile.sh
+# Every kernel of the treelet builds, pre-splitting and the collapse included.
+step kernels 40 env NAME=kernels SCENES="conference field:707" TILES=default BUILDERS=trbvh,trbvh-split \
+  REPEATS=5 bash scripts/gpu-profile.sh
 
 echo "== summary (at $(elapsed) s)"
 echo "tests:"
@@ -112,7 +116,7 @@ for name in ("scaling.jsonl", "baseline.jsonl"):
               f" {b.get('min', 0):7.2f} {r['build_ms']:7.2f} {b.get('max', 0):7.2f}"
               f" {r.get('mtris_per_s') or 0:7.1f}  {st}  {r.get('sah') or 0:.4f}")
 PY
-for f in layouts profile schedules; do
+for f in layouts profile kernels schedules; do
   echo "--- $f (tail)"
   tail -n 40 $res/$f.txt 2>/dev/null
 done

@@ -5,7 +5,8 @@
 # default tiles and with each tile size (`--sort-tile-items`).
 # Here, first:   bash ../shared/gpu/pack.sh
 # Then `run` with carry [".gpu", ".gl"] and the command:   bash scripts/gpu-profile.sh
-# JSON lines go to $OUT/profile.jsonl; printed last, per scene and builder with the default tiles:
+# JSON lines go to $OUT/$NAME.jsonl (NAME: profile by default); printed last, per scene and
+# builder with the default tiles:
 # each stage's dispatches by kernel (count, total, min/median/max ms), then the treelet rounds
 # dispatch by dispatch; then build and sort ms per tile size. SCENES, BUILDERS, TILES and REPEATS
 # override the defaults; with TREELET set to a treelet binary it runs
@@ -13,7 +14,7 @@
 # TREELET=target/release/treelet SCENES=field:100 REPEATS=1 bash scripts/gpu-profile.sh).
 set -u
 . scripts/gpu-env.sh
-: > "$out/profile.jsonl"
+: > "$out/${NAME:-profile}.jsonl"
 for s in ${SCENES:-conference sibenik field:707 field:1000}; do
   for tile in ${TILES:-default 8 16 32}; do
     opts=""
@@ -21,10 +22,11 @@ for s in ${SCENES:-conference sibenik field:707 field:1000}; do
     # shellcheck disable=SC2086
     timeout 250 "$bin" bench --scene "$s" --builder "${BUILDERS:-lbvh,trbvh,trbvh-split}" $opts \
       --profile-dispatches --width 64 --height 64 --spp 1 --repeats "${REPEATS:-11}" \
-      >> "$out/profile.jsonl" 2>> "$out/profile.log" || echo "$s $tile: exit $? (see profile.log)"
+      >> "$out/${NAME:-profile}.jsonl" 2>> "$out/${NAME:-profile}.log" \
+      || echo "$s $tile: exit $? (see ${NAME:-profile}.log)"
   done
 done
-python3 - "$out/profile.jsonl" <<'PY'
+python3 - "$out/${NAME:-profile}.jsonl" <<'PY'
 import json, statistics, sys
 rows = [json.loads(l) for l in open(sys.argv[1]) if l.startswith("{")]
 for r in (r for r in rows if r["sort_tile_items"] is None):
