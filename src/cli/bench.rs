@@ -120,31 +120,28 @@ impl BenchArgs {
                 ("--treelet-dp", !self.treelet_dp.is_empty()),
             ],
         )?;
-        let or_default = |values: &[u32]| -> Vec<Option<u32>> {
-            if values.is_empty() {
-                vec![None]
-            } else {
-                values.iter().copied().map(Some).collect()
-            }
-        };
-        let forms: Vec<Option<TreeletDp>> = if self.treelet_dp.is_empty() {
-            vec![None]
-        } else {
-            self.treelet_dp.iter().map(|&f| Some(f.into())).collect()
-        };
         let mut schedules = Vec::new();
         for level_dispatches in or_default(&self.level_dispatches) {
             for team_below in or_default(&self.team_below) {
-                for &dp in &forms {
+                for dp in or_default(&self.treelet_dp) {
                     schedules.push(RoundSchedule {
                         level_dispatches,
                         team_below,
-                        dp,
+                        dp: dp.map(TreeletDp::from),
                     });
                 }
             }
         }
         Ok(schedules)
+    }
+}
+
+/// The values of a list option, or the default (None) where none is given.
+fn or_default<T: Copy>(values: &[T]) -> Vec<Option<T>> {
+    if values.is_empty() {
+        vec![None]
+    } else {
+        values.iter().copied().map(Some).collect()
     }
 }
 

@@ -207,9 +207,9 @@ pub(crate) struct TreeletRounds {
     /// the declared width).
     climb_level: Kernel<RoundParams>,
     level: Kernel<RoundParams>,
-    /// Per treelet size from MIN_TREELET_SIZE and DP form (`TreeletDp::ALL`), compiled when
-    /// first used.
-    treelet_kernels: [[OnceLock<TreeletKernels>; 2]; TREELET_SIZES],
+    /// Per treelet size from MIN_TREELET_SIZE and DP form (`dp as usize`), compiled when first
+    /// used.
+    treelet_kernels: [[OnceLock<TreeletKernels>; TreeletDp::FORMS]; TREELET_SIZES],
     /// `subsets_by_size`, read by the teams.
     subsets: wgpu::Buffer,
     /// The roots of the dispatched levels and the first climbed one, each level in its slots
@@ -324,11 +324,8 @@ impl TreeletRounds {
             return;
         }
         let dp = self.schedule.dp();
-        let form = TreeletDp::ALL
-            .iter()
-            .position(|&f| f == dp)
-            .expect("every form is in ALL");
-        let kernels = self.treelet_kernels[(round.treelet_size - MIN_TREELET_SIZE) as usize][form]
+        let kernels = self.treelet_kernels[(round.treelet_size - MIN_TREELET_SIZE) as usize]
+            [dp as usize]
             .get_or_init(|| TreeletKernels::new(ctx, round.treelet_size, dp));
         let treelet_buffers = [
             state.nodes,
