@@ -24,6 +24,14 @@ override WORKGROUP_WIDTH: u32 = 64u;
 #include "node_words.wgsl"
 #include "bottom_up_climb.wgsl"
 
+// The parent's box: the union of its children's.
+fn finish_parent(parent: u32) {
+    let w = parent * 8u;
+    let left = atomicLoad(&node_words[w + 3u]);
+    let right = atomicLoad(&node_words[w + 7u]);
+    store_box(parent, min(load_min(left), load_min(right)), max(load_max(left), load_max(right)));
+}
+
 @compute @workgroup_size(WORKGROUP_WIDTH)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let j = gid.x + gid.y * params.row_pitch;

@@ -30,6 +30,8 @@ pub const ALL: &[&KernelInfo] = &[
     &trace::RAYS_INTERSECT.info,
     &trace::RAYS_INTERSECT_WIDE.info,
     &trace::PATHS_TRACE_WIDE.info,
+    &bvh::wide::NODES_LINK.info,
+    &bvh::wide::COSTS_CLIMB.info,
     &bvh::wide::WIDE_NODES_EMIT.info,
     &bvh::wide::WIDE_NODES_FINISH.info,
     &anim::CLOTH_ANIMATE.info,

@@ -266,25 +266,39 @@ fn bench_climb_widths_build_the_same_trees() {
     );
 }
 
-/// `bench --wide-collapse optimal` traces the SAH-optimal wide tree (valid, its SAH the optimum,
-/// fewer nodes than the greedy conversion's); without the wide layout it is refused.
+/// `bench --wide-collapse optimal,greedy` converts the same tree both ways on the GPU (greedy by
+/// default): valid trees, the optimal one of the optimal SAH with fewer nodes and two more
+/// dispatches in the wide stage; a collapse without the wide layout is refused, and so is an
+/// unknown one.
 #[test]
-fn bench_traces_the_optimal_wide_collapse() {
-    let greedy = quick_bench("trbvh", &["--layout", "wide"]);
-    let optimal = quick_bench("trbvh", &["--layout", "wide", "--wide-collapse", "optimal"]);
-    assert_eq!(greedy[0]["wide_collapse"], "greedy");
-    assert_eq!(optimal[0]["wide_collapse"], "optimal");
-    assert_eq!(optimal[0]["valid"], true);
-    assert_eq!(optimal[0]["wide_sah"], optimal[0]["wide_sah_optimal"]);
-    assert_eq!(
-        optimal[0]["wide_sah_optimal"],
-        greedy[0]["wide_sah_optimal"]
+fn bench_converts_by_both_wide_collapses() {
+    let default = quick_bench("trbvh", &["--layout", "wide"]);
+    let both = quick_bench(
+        "trbvh",
+        &["--layout", "wide", "--wide-collapse", "optimal,greedy"],
     );
-    assert!(optimal[0]["nodes"].as_u64() < greedy[0]["nodes"].as_u64());
-    let refused = treelet(&["bench", "--scene", "cornell", "--wide-collapse", "optimal"]);
+    let (optimal, greedy) = (&both[0], &both[1]);
+    assert_eq!(default[0]["wide_collapse"], "greedy");
+    assert_eq!(optimal["wide_collapse"], "optimal");
+    assert_eq!(greedy["wide_collapse"], "greedy");
+    for run in [optimal, greedy] {
+        assert_eq!(run["valid"], true);
+        assert_eq!(run["wide_sah_optimal"], optimal["wide_sah_optimal"]);
+    }
+    assert_eq!(optimal["wide_sah"], optimal["wide_sah_optimal"]);
+    assert!(greedy["wide_sah"].as_f64() > optimal["wide_sah"].as_f64());
+    assert!(optimal["nodes"].as_u64() < greedy["nodes"].as_u64());
+    let wide_dispatches =
+        |run: &serde_json::Value| run["stages_dispatches"]["wide"].as_u64().unwrap();
+    assert_eq!(wide_dispatches(optimal), wide_dispatches(greedy) + 2);
+    let refused = treelet(&["bench", "--scene", "cornell", "--wide-collapse", "greedy"]);
     assert!(!refused.status.success());
     let stderr = String::from_utf8_lossy(&refused.stderr);
     assert!(stderr.contains("applies to the wide layout"), "{stderr}");
+    let unknown = treelet(&["bench", "--scene", "cornell", "--wide-collapse", "best"]);
+    assert!(!unknown.status.success());
+    let stderr = String::from_utf8_lossy(&unknown.stderr);
+    assert!(stderr.contains("unknown wide collapse 'best'"), "{stderr}");
 }
 
 /// `bench --profile-dispatches` times every dispatch on its own: `dispatch_ms` lists them in

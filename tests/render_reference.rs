@@ -7,7 +7,7 @@
 mod common;
 
 use common::{convert_wide, gpu};
-use treelet::bvh::wide::Layout;
+use treelet::bvh::wide::{Layout, WideCollapse};
 use treelet::bvh::{build_sweep_sah, SahParams};
 use treelet::device::{Geometry, Tree};
 use treelet::scene::{load_scene, Material, Scene};
@@ -25,7 +25,7 @@ fn render(scene: &Scene, layout: Layout) -> image::RgbaImage {
     let geometry = Geometry::upload(gpu(), scene).unwrap();
     let mut tree = Tree::upload(gpu(), &bvh).unwrap();
     if layout == Layout::Wide {
-        convert_wide(&mut tree);
+        convert_wide(&mut tree, WideCollapse::default());
     }
     let settings = RenderSettings {
         width: 96,

@@ -1,9 +1,12 @@
 // Binary-to-wide conversion, one wide node per invocation (CPU twin: `WideBvh::from_binary`,
 // src/bvh/wide/convert.rs; the kernels wide_nodes_emit.wgsl and wide_nodes_finish.wgsl run it
 // level by level, top-down). Wide node w is made from binary node `wide_sources[w]`:
-// 1. Children: start from its two children; while fewer than 8, open the internal child of the
-//    largest surface area (its two children replace it). The greedy collapse of the wide-BVH
-//    literature in place of Ylitie et al.'s SAH-optimal DP.
+// 1. Children, by one of two collapses (`params.collapse`):
+//    - optimal: the split of 8 slots that costs_climb.wgsl chose for the binary node, each part
+//      expanded by its node's choices (collapse_choices.wgsl), left before right: Ylitie et al.'s
+//      SAH-optimal collapse;
+//    - greedy: start from its two children; while fewer than 8, open the internal child of the
+//      largest surface area (its two children replace it), the common cheaper collapse.
 // 2. Slots: child j goes to the free slot s maximizing Σ_a ±(centre_j − centre_node)_a (+ where
 //    bit a of s is set), pairs taken greedily best first (the paper's octant assignment, greedy
 //    instead of an auction); the traversal then visits slots in ray-octant order.
@@ -19,6 +22,7 @@
 #include "bvh_node.wgsl"
 #include "wide_node.wgsl"
 #include "unfused.wgsl"
+#include "collapse_choices.wgsl"
 
 struct WideParams {
     // Level of the tree this dispatch emits (0: the root); the per-level kernel only.
@@ -29,7 +33,16 @@ struct WideParams {
     capacity: u32,
     // Always 0 (see unfused.wgsl).
     zero: u32,
+    // COLLAPSE_GREEDY or COLLAPSE_OPTIMAL.
+    collapse: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 }
+
+// Values of `WideParams::collapse` (Rust twin: `WideCollapse`).
+const COLLAPSE_GREEDY: u32 = 0u;
+const COLLAPSE_OPTIMAL: u32 = 1u;
 
 @group(0) @binding(0) var<uniform> params: WideParams;
 @group(0) @binding(1) var<storage, read> nodes: array<BvhNode>;
@@ -45,6 +58,8 @@ struct WideParams {
 // its indirect arguments) from one and sizes the next level in the other.
 @group(0) @binding(7) var<storage, read> this_level: array<u32>;
 @group(0) @binding(8) var<storage, read_write> next_level: array<atomic<u32>>;
+// The optimal collapse's choices per binary node (costs_climb.wgsl; unused by the greedy one).
+@group(0) @binding(9) var<storage, read> choices: array<u32>;
 
 const RECORD_WORDS: u32 = 8u;
 const EMIT_WORKGROUP: u32 = 64u;
@@ -110,6 +125,36 @@ fn draft_wide_node(source: u32) -> WideDraft {
         child[0] = top;
         child_index[0] = source;
         count = 1u;
+    } else if params.collapse == COLLAPSE_OPTIMAL {
+        // (binary node, slots) still to expand, the next on top: at most 8, as each holds a slot.
+        var pending: array<vec2<u32>, 8>;
+        let k = wide_split(choices[source]);
+        pending[0] = vec2<u32>(top.right_or_count, 8u - k);
+        pending[1] = vec2<u32>(top.left_or_first, k);
+        var sp = 2u;
+        while sp > 0u {
+            sp--;
+            let n = pending[sp].x;
+            var slots = pending[sp].y;
+            let node = nodes[n];
+            loop {
+                if (node.right_or_count & LEAF_FLAG) != 0u || slots == 1u {
+                    child[count] = node;
+                    child_index[count] = n;
+                    count++;
+                    break;
+                }
+                let left_slots = slots_choice(choices[n], slots);
+                if left_slots == 0u {
+                    slots--;
+                    continue;
+                }
+                pending[sp] = vec2<u32>(node.right_or_count, slots - left_slots);
+                pending[sp + 1u] = vec2<u32>(node.left_or_first, left_slots);
+                sp += 2u;
+                break;
+            }
+        }
     } else {
         child_index[0] = top.left_or_first;
         child_index[1] = top.right_or_count;
@@ -118,7 +163,7 @@ fn draft_wide_node(source: u32) -> WideDraft {
         count = 2u;
     }
     loop {
-        if count == 8u {
+        if count == 8u || params.collapse == COLLAPSE_OPTIMAL {
             break;
         }
         var widest = 8u;

@@ -14,7 +14,7 @@ use super::settings::ViewSettings;
 use super::stats::BuildTiming;
 use super::stats::FrameStats;
 use crate::anim::{AnimateStage, ANIMATIONS};
-use crate::bvh::wide::{Layout, WideNode, WIDTH};
+use crate::bvh::wide::{Layout, WideCollapse, WideNode, WIDTH};
 use crate::bvh::{Builder, BvhNode, UpdateMode};
 use crate::scene::SCENES;
 
@@ -274,7 +274,11 @@ fn size_text(bytes: u64) -> String {
 fn layout_detail(layout: Layout) -> String {
     match layout {
         Layout::Binary => format!("2-wide, {} B nodes", std::mem::size_of::<BvhNode>()),
-        Layout::Wide => format!("{WIDTH}-wide, {} B nodes", std::mem::size_of::<WideNode>()),
+        Layout::Wide => format!(
+            "{WIDTH}-wide, {} B nodes, {} collapse",
+            std::mem::size_of::<WideNode>(),
+            WideCollapse::default().name()
+        ),
     }
 }
 
@@ -322,8 +326,8 @@ fn bvh(ui: &mut egui::Ui, info: &PanelInfo, settings: &mut ViewSettings) {
         .response
         .on_hover_text(
             "The node layout traced: the builder's binary tree, or that tree converted on the \
-             GPU after every update into the compressed 8-wide layout (Ylitie et al. 2017; \
-             stage \"wide\" among the build times)",
+             GPU after every update into the compressed 8-wide layout (Ylitie et al. 2017, \
+             greedy collapse; stage \"wide\" among the build times)",
         );
     ui.add_enabled(
         settings.builder.is_gpu(),

@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use super::treelet::{RoundSchedule, TreeletSettings};
 use super::update::{TreeUpdater, UpdateMode};
-use super::wide::{check_leaf_sizes, Layout, WideConverter};
+use super::wide::{check_leaf_sizes, Layout, WideCollapse, WideConverter};
 use super::{build_sbvh, build_sweep_sah, Bvh, SahParams};
 use crate::device::{Geometry, Tree};
 use crate::gpu::{GpuContext, GpuTimer, ParamSlab, Recorder, StageTime, Timing, Warmup};
@@ -137,7 +137,9 @@ impl Builder {
     /// `timing.repeats` timed builds, each submitted and waited for, reporting the one with the
     /// median time; the wide layout's conversion is one of their stages ("wide"). CPU builders
     /// are timed once, and their upload is converted once on the GPU (timed as "wide").
-    /// `schedule` spreads the treelet rounds over the device (trbvh, trbvh-split).
+    /// `collapse` is the wide conversion's; `schedule` spreads the treelet rounds over the device
+    /// (trbvh, trbvh-split).
+    #[allow(clippy::too_many_arguments)]
     pub fn build(
         self,
         ctx: &GpuContext,
@@ -145,20 +147,30 @@ impl Builder {
         params: &SahParams,
         timing: &Timing,
         layout: Layout,
+        collapse: WideCollapse,
         schedule: RoundSchedule,
     ) -> Result<(Geometry, Tree, BuildReport)> {
         let geometry = Geometry::upload(ctx, scene)?;
         match self {
-            Builder::Sweep => cpu_build(ctx, geometry, "cpu sweep", layout, || {
-                build_sweep_sah(&scene.triangles, params)
-            }),
-            Builder::Sbvh => cpu_build(ctx, geometry, "cpu sbvh", layout, || {
-                build_sbvh(&scene.triangles, params)
-            }),
+            Builder::Sweep => {
+                let converter = wide_converter(ctx, params, layout, collapse);
+                cpu_build(ctx, geometry, "cpu sweep", converter, || {
+                    build_sweep_sah(&scene.triangles, params)
+                })
+            }
+            Builder::Sbvh => {
+                let converter = wide_converter(ctx, params, layout, collapse);
+                cpu_build(ctx, geometry, "cpu sbvh", converter, || {
+                    build_sbvh(&scene.triangles, params)
+                })
+            }
             Builder::Lbvh | Builder::Trbvh(_) | Builder::TrbvhSplit(_) => {
                 let mut tree = Tree::empty(ctx)?;
                 let mut updater = TreeUpdater::new(ctx, UpdateMode::Rebuild(self), params)?;
                 updater.set_layout(ctx, layout);
+                if let Some(converter) = updater.converter_mut() {
+                    converter.set_collapse(collapse);
+                }
                 updater.set_round_schedule(schedule);
                 let passes = updater.pass_count();
                 let mut slab = ParamSlab::new(ctx);
@@ -207,13 +219,27 @@ impl Builder {
     }
 }
 
-/// Runs a CPU builder once (timed, CPU time) and uploads its tree; for the wide layout the
-/// upload is converted on the GPU (its time added as stage "wide").
+/// The wide conversion of `layout` (none for the binary layout).
+fn wide_converter(
+    ctx: &GpuContext,
+    params: &SahParams,
+    layout: Layout,
+    collapse: WideCollapse,
+) -> Option<WideConverter> {
+    (layout == Layout::Wide).then(|| {
+        let mut converter = WideConverter::new(ctx, params);
+        converter.set_collapse(collapse);
+        converter
+    })
+}
+
+/// Runs a CPU builder once (timed, CPU time) and uploads its tree; with a `converter` (the wide
+/// layout) the upload is converted on the GPU (its time added as stage "wide").
 fn cpu_build(
     ctx: &GpuContext,
     geometry: Geometry,
     label: &str,
-    layout: Layout,
+    converter: Option<WideConverter>,
     build: impl FnOnce() -> Bvh,
 ) -> Result<(Geometry, Tree, BuildReport)> {
     let start = Instant::now();
@@ -221,12 +247,12 @@ fn cpu_build(
     let cpu_ms = start.elapsed().as_secs_f64() * 1e3;
     let mut tree = Tree::upload(ctx, &bvh)?;
     let mut stages = vec![StageTime::cpu(label, cpu_ms)];
-    if layout == Layout::Wide {
+    if let Some(converter) = converter {
         check_leaf_sizes(&bvh)?;
         let mut timer = GpuTimer::new(ctx, 1);
         let mut slab = ParamSlab::new(ctx);
         let mut rec = Recorder::new(ctx, &mut slab, Some(&mut timer));
-        WideConverter::new(ctx).record(&mut rec, &mut tree)?;
+        converter.record(&mut rec, &mut tree)?;
         rec.submit();
         stages.extend(timer.read(ctx)?);
     }

@@ -147,7 +147,7 @@ impl TreeUpdater {
             Layout::Wide => self
                 .converter
                 .take()
-                .or_else(|| Some(WideConverter::new(ctx))),
+                .or_else(|| Some(WideConverter::new(ctx, &self.sah))),
         };
     }
 

@@ -12,12 +12,11 @@ use serde::Serialize;
 use treelet::anim::load_still;
 use treelet::bvh::treelet::{RoundSchedule, TreeletDp, MAX_LEVEL_DISPATCHES};
 use treelet::bvh::wide::{
-    validate_wide, validate_wide_with_references, wide_sah_costs, Layout, WideBvh,
+    validate_wide, validate_wide_with_references, wide_sah_costs, Layout, WideCollapse,
 };
 use treelet::bvh::{
     sah_cost, validate, validate_with_references, write_bvh, write_wide_bvh, Builder,
 };
-use treelet::device::WideTree;
 use treelet::gpu::{aggregate_stages, check_climb_width, GpuContext, Spread, Timing, Warmup};
 use treelet::sort::check_tile_items;
 use treelet::trace::{PathTracer, TraceStats};
@@ -78,18 +77,6 @@ pub struct BenchArgs {
     /// devices). The trees are the same
     #[arg(long, value_parser = parse_climb_width)]
     pub(super) climb_width: Option<u32>,
-    /// How the wide layout collapses the binary tree: greedy (the GPU conversion) or optimal (the
-    /// SAH-optimal collapse of Ylitie et al., converted on the CPU and uploaded: a reference for
-    /// trace speed; the build's `wide` stage still times the GPU's greedy conversion)
-    #[arg(long, value_enum, default_value_t = WideCollapse::Greedy)]
-    wide_collapse: WideCollapse,
-}
-
-/// `bench --wide-collapse`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-enum WideCollapse {
-    Greedy,
-    Optimal,
 }
 
 /// `bench --treelet-dp`.
@@ -205,8 +192,7 @@ struct BenchRecord {
     dispatch_ms: Option<Vec<DispatchTime>>,
     /// SAH of the binary tree.
     sah: f32,
-    /// Wide layout: the collapse of the traced wide tree ("greedy": the GPU conversion's;
-    /// "optimal": the CPU reference's, uploaded).
+    /// Wide layout: the conversion's collapse (`--wide-collapse`: optimal or greedy).
     wide_collapse: Option<&'static str>,
     /// Wide layout: SAH of the traced wide tree (of its collapse, `wide_collapse`) and of the
     /// SAH-optimal collapse of the same binary tree (Ylitie et al.'s DP).
@@ -258,34 +244,35 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
         repeats: args.repeats,
     };
     let layouts = &args.trace.layout;
-    if args.wide_collapse == WideCollapse::Optimal && !layouts.contains(&Layout::Wide) {
-        return Err(treelet::Error::InvalidArgument(
-            "--wide-collapse optimal applies to the wide layout (add --layout wide)".into(),
-        ));
-    }
+    let collapses = args.trace.wide_collapses()?;
     let schedules = args.schedules(&builders)?;
-    let runs: Vec<(Builder, RoundSchedule, Layout)> = builders
+    // The binary layout once, the wide layout once per collapse.
+    let layout_runs: Vec<(Layout, WideCollapse)> = layouts
+        .iter()
+        .flat_map(|&l| match l {
+            Layout::Binary => vec![(l, WideCollapse::default())],
+            Layout::Wide => collapses.iter().map(|&c| (l, c)).collect(),
+        })
+        .collect();
+    let runs: Vec<(Builder, RoundSchedule, Layout, WideCollapse)> = builders
         .iter()
         .flat_map(|&b| {
             let schedules = match b.treelet_settings() {
                 Some(_) => schedules.clone(),
                 None => vec![RoundSchedule::default()],
             };
+            let layout_runs = &layout_runs;
             schedules
                 .into_iter()
-                .flat_map(move |s| layouts.iter().map(move |&l| (b, s, l)))
+                .flat_map(move |s| layout_runs.iter().map(move |&(l, c)| (b, s, l, c)))
         })
         .collect();
-    for &(builder, schedule, layout) in &runs {
-        let (geometry, mut tree, report) =
-            builder.build(gpu, &scene, &params, &timing, layout, schedule)?;
+    for &(builder, schedule, layout, collapse) in &runs {
+        let (geometry, tree, report) =
+            builder.build(gpu, &scene, &params, &timing, layout, collapse, schedule)?;
         let bvh = tree.download(gpu)?;
-        let optimal = layout == Layout::Wide && args.wide_collapse == WideCollapse::Optimal;
-        if optimal {
-            let wide = WideBvh::from_binary_optimal(&bvh, &params)?;
-            tree.wide = Some(WideTree::upload(gpu, &wide)?);
-        }
-        let label = run_label(builder, schedule, layout);
+        let optimal = collapse == WideCollapse::Optimal;
+        let label = run_label(builder, schedule, layout, collapse);
         let references = builder.duplicates_references();
         let (validation, nodes, leaves, tree_bytes) = match &tree.wide {
             None => {
@@ -397,11 +384,7 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
             dispatches: stages.iter().map(|s| s.dispatches).sum(),
             dispatch_ms,
             sah: sah_cost(&bvh, &params),
-            wide_collapse: (layout == Layout::Wide).then_some(if optimal {
-                "optimal"
-            } else {
-                "greedy"
-            }),
+            wide_collapse: (layout == Layout::Wide).then_some(collapse.name()),
             wide_sah: wide_sah.map(|c| if optimal { c.1 } else { c.0 }),
             wide_sah_optimal: wide_sah.map(|c| c.1),
             valid: validation.is_ok(),
@@ -426,8 +409,13 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
 }
 
 /// A run's label in logs and export file names: the builder's, the schedule where one was given,
-/// the layout.
-fn run_label(builder: Builder, schedule: RoundSchedule, layout: Layout) -> String {
+/// the layout (and the wide layout's collapse).
+fn run_label(
+    builder: Builder,
+    schedule: RoundSchedule,
+    layout: Layout,
+    collapse: WideCollapse,
+) -> String {
     let mut label = builder.label();
     if let Some(levels) = schedule.level_dispatches {
         label += &format!(" d={levels}");
@@ -438,7 +426,10 @@ fn run_label(builder: Builder, schedule: RoundSchedule, layout: Layout) -> Strin
     if let Some(dp) = schedule.dp {
         label += &format!(" dp={}", dp.name());
     }
-    format!("{label} {}", layout.name())
+    match layout {
+        Layout::Binary => format!("{label} binary"),
+        Layout::Wide => format!("{label} wide {}", collapse.name()),
+    }
 }
 
 /// The trace of median throughput (GPU time where timestamps exist, wall-clock time otherwise).

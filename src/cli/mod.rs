@@ -8,7 +8,7 @@ mod view;
 
 use clap::{Args, Parser, Subcommand};
 use treelet::bvh::treelet::TreeletSettings;
-use treelet::bvh::wide::Layout;
+use treelet::bvh::wide::{Layout, WideCollapse};
 use treelet::bvh::{Builder, SahParams, DEFAULT_SPLIT_PERCENT};
 use treelet::gpu::{GpuContext, GpuOptions};
 use treelet::trace::RenderSettings;
@@ -84,6 +84,12 @@ pub struct TraceArgs {
     /// it on the GPU); `bench` takes a comma-separated list and measures each on the same tree
     #[arg(long, value_delimiter = ',', value_parser = parse_layout, default_value = "binary")]
     layout: Vec<Layout>,
+    /// How the wide layout's conversion picks a wide node's children: greedy (open the largest
+    /// child until 8 slots are taken; the default) or optimal (the SAH-optimal collapse of
+    /// Ylitie et al., its dynamic program on the GPU); `bench` takes a comma-separated list and
+    /// measures each on the same tree
+    #[arg(long, value_delimiter = ',', value_parser = parse_wide_collapse)]
+    wide_collapse: Vec<WideCollapse>,
 }
 
 impl TraceArgs {
@@ -181,6 +187,30 @@ impl TraceArgs {
         }
     }
 
+    /// The wide collapses asked for (the default when none was); refused without the wide
+    /// layout, to which they apply.
+    fn wide_collapses(&self) -> Result<Vec<WideCollapse>> {
+        if self.wide_collapse.is_empty() {
+            return Ok(vec![WideCollapse::default()]);
+        }
+        if !self.layout.contains(&Layout::Wide) {
+            return Err(treelet::Error::InvalidArgument(
+                "--wide-collapse applies to the wide layout (add --layout wide)".into(),
+            ));
+        }
+        Ok(self.wide_collapse.clone())
+    }
+
+    /// The one wide collapse of commands that trace one tree (`render`).
+    fn single_wide_collapse(&self) -> Result<WideCollapse> {
+        match self.wide_collapses()?[..] {
+            [collapse] => Ok(collapse),
+            _ => Err(treelet::Error::InvalidArgument(
+                "this command takes one --wide-collapse".into(),
+            )),
+        }
+    }
+
     /// The one layout of commands that trace one (`render`).
     fn single_layout(&self) -> Result<Layout> {
         match self.layout[..] {
@@ -236,6 +266,10 @@ fn parse_split_budget(text: &str) -> std::result::Result<u32, String> {
 
 fn parse_layout(name: &str) -> std::result::Result<Layout, String> {
     Layout::parse(name).map_err(|e| e.to_string())
+}
+
+fn parse_wide_collapse(name: &str) -> std::result::Result<WideCollapse, String> {
+    WideCollapse::parse(name).map_err(|e| e.to_string())
 }
 
 fn parse_preset(name: &str) -> std::result::Result<TreeletSettings, String> {

@@ -66,6 +66,7 @@ pub fn run(gpu: &GpuContext, args: &RenderArgs) -> Result<()> {
         &params,
         &Timing::quick(1),
         layout,
+        args.trace.single_wide_collapse()?,
         RoundSchedule::default(),
     )?;
     let nodes = match &tree.wide {

@@ -1,8 +1,9 @@
 //! A compressed wide BVH on the GPU (layout of `bvh::wide::WideNode`), converted from a binary
 //! `Tree` by `bvh::wide::WideConverter`. `counters` holds [nodes, references, capacity
 //! overflows] as the GPU wrote them; `records` the conversion's per-level records (indirect
-//! dispatch arguments; even levels in the first buffer, odd in the second). The buffers grow to
-//! what a conversion needs and are reused.
+//! dispatch arguments; even levels in the first buffer, odd in the second); `collapse` the
+//! optimal collapse's scratch, per binary node. The buffers grow to what a conversion needs and
+//! are reused.
 
 use crate::bvh::wide::{WideBvh, WideNode};
 use crate::gpu::{indirect_buffer_zeroed, read_buffer, storage_buffer_zeroed, GpuContext};
@@ -17,11 +18,49 @@ pub struct WideTree {
     pub records: [wgpu::Buffer; 2],
     /// Wide nodes `nodes` holds.
     pub capacity: u32,
+    pub collapse: CollapseScratch,
+}
+
+/// What the SAH-optimal collapse computes per binary node before the conversion (kernels
+/// `nodes_link` and `costs_climb`): 40 bytes per node of the binary tree's buffer.
+pub struct CollapseScratch {
+    pub parents: wgpu::Buffer,
+    /// The climb's arrival counters.
+    pub arrivals: wgpu::Buffer,
+    /// C(n, 1..=7), f32 (`COST_WORDS` in collapse_choices.wgsl).
+    pub costs: wgpu::Buffer,
+    /// One word of choices per node (collapse_choices.wgsl).
+    pub choices: wgpu::Buffer,
+    /// Binary nodes the buffers hold.
+    pub capacity: u32,
+}
+
+/// Collapse costs per binary node (`COST_WORDS` in collapse_choices.wgsl).
+pub const COLLAPSE_COST_WORDS: u64 = 7;
+
+impl CollapseScratch {
+    fn new(ctx: &GpuContext, binary_nodes: u32) -> Result<Self> {
+        let n = u64::from(binary_nodes.max(1));
+        Ok(Self {
+            parents: storage_buffer_zeroed(ctx, "collapse parents", n * 4)?,
+            arrivals: storage_buffer_zeroed(ctx, "collapse arrivals", n * 4)?,
+            costs: storage_buffer_zeroed(ctx, "collapse costs", n * 4 * COLLAPSE_COST_WORDS)?,
+            choices: storage_buffer_zeroed(ctx, "collapse choices", n * 4)?,
+            capacity: binary_nodes.max(1),
+        })
+    }
 }
 
 impl WideTree {
-    /// Buffers for `nodes` wide nodes, `prims` references and level records of `record_bytes`.
-    pub fn new(ctx: &GpuContext, nodes: u32, prims: u32, record_bytes: u64) -> Result<Self> {
+    /// Buffers for `nodes` wide nodes, `prims` references, level records of `record_bytes` and
+    /// the optimal collapse of a binary tree of up to `binary_nodes` nodes.
+    pub fn new(
+        ctx: &GpuContext,
+        nodes: u32,
+        prims: u32,
+        binary_nodes: u32,
+        record_bytes: u64,
+    ) -> Result<Self> {
         let nodes = nodes.max(1);
         Ok(Self {
             nodes: storage_buffer_zeroed(
@@ -37,14 +76,15 @@ impl WideTree {
                 indirect_buffer_zeroed(ctx, "wide records (odd levels)", record_bytes)?,
             ],
             capacity: nodes,
+            collapse: CollapseScratch::new(ctx, binary_nodes)?,
         })
     }
 
-    /// A wide tree made on the CPU (e.g. `WideBvh::from_binary_optimal`, a reference), uploaded
-    /// for tracing: its nodes, references and counts, as a conversion would leave them.
+    /// A wide tree made on the CPU (e.g. by `WideBvh::from_binary_optimal`), uploaded for
+    /// tracing: its nodes, references and counts, as a conversion would leave them.
     pub fn upload(ctx: &GpuContext, wide: &WideBvh) -> Result<Self> {
         let (nodes, prims) = (wide.nodes.len() as u32, wide.prim_indices.len() as u32);
-        let tree = Self::new(ctx, nodes, prims, 12)?;
+        let tree = Self::new(ctx, nodes, prims, 1, 12)?;
         ctx.queue
             .write_buffer(&tree.nodes, 0, bytemuck::cast_slice(&wide.nodes));
         if prims > 0 {

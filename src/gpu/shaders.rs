@@ -97,6 +97,10 @@ const INCLUDES: &[(&str, &str)] = &[
         include_str!("../../shaders/include/path_integrator.wgsl"),
     ),
     (
+        "collapse_choices.wgsl",
+        include_str!("../../shaders/include/collapse_choices.wgsl"),
+    ),
+    (
         "treelet_dp.wgsl",
         include_str!("../../shaders/include/treelet_dp.wgsl"),
     ),

@@ -306,11 +306,12 @@ pub fn record_update(
 }
 
 /// Converts `tree` into the wide layout on the GPU (`tree.wide`), as an update does.
-pub fn convert_wide(tree: &mut treelet::device::Tree) {
+pub fn convert_wide(tree: &mut treelet::device::Tree, collapse: treelet::bvh::wide::WideCollapse) {
     let mut slab = treelet::gpu::ParamSlab::new(gpu());
     let mut rec = treelet::gpu::Recorder::new(gpu(), &mut slab, None);
-    treelet::bvh::wide::WideConverter::new(gpu())
-        .record(&mut rec, tree)
-        .unwrap();
+    let mut converter =
+        treelet::bvh::wide::WideConverter::new(gpu(), &treelet::bvh::SahParams::default());
+    converter.set_collapse(collapse);
+    converter.record(&mut rec, tree).unwrap();
     rec.submit();
 }

@@ -17,6 +17,7 @@ use std::collections::VecDeque;
 
 use super::node::{exponent_scale, put_byte, WideBvh, WideNode, WIDTH};
 use super::optimal::OptimalCollapse;
+use super::WideCollapse;
 use crate::bvh::{Bvh, BvhNode, SahParams};
 use crate::{Error, Result};
 
@@ -45,18 +46,27 @@ fn check_convertible(bvh: &Bvh) -> Result<()> {
     check_leaf_sizes(bvh)
 }
 
-/// The most wide nodes the conversion makes from a binary tree of `leaves` leaves (at least 1).
-/// A wide node with fewer than 8 children has only leaves as children (`open_children` opens
-/// internal children while a slot is free), and at least two of them unless it is a root over a
-/// single leaf. With F nodes of 8 children (a of them leaves, in all) and T other nodes, the
-/// N − 1 nodes below the root are the internal children: N − 1 = 8F − a, with a + 2T ≤ leaves,
-/// so N = F + T = (8T + a − 1) / 7 ≤ (4 · leaves − 1) / 7. A balanced tree of 16 leaves makes 9.
-pub fn max_wide_nodes(leaves: u32) -> u32 {
-    // (4 · u32::MAX − 1) / 7 < u32::MAX.
-    ((4 * u64::from(leaves)).saturating_sub(1) / 7).max(1) as u32
+/// The most wide nodes the conversion by `collapse` makes from a binary tree of `leaves` leaves
+/// (at least 1).
+/// - Greedy: a wide node with fewer than 8 children has only leaves as children
+///   (`open_children` opens internal children while a slot is free), and at least two of them
+///   unless it is a root over a single leaf. With F nodes of 8 children (a of them leaves, in all)
+///   and T other nodes, the N − 1 nodes below the root are the internal children: N − 1 = 8F − a,
+///   with a + 2T ≤ leaves, so N = F + T = (8T + a − 1) / 7 ≤ (4 · leaves − 1) / 7. A balanced
+///   tree of 16 leaves makes 9.
+/// - Optimal: a wide node may leave slots free beside internal children (a child of its own can
+///   cost less than two slots spent on the child's children), so only the greedy bound's first
+///   argument holds: every wide node splits its 8 slots between two binary subtrees, so it has
+///   at least two children; N − 1 + leaves ≥ 2N gives N ≤ leaves − 1.
+pub fn max_wide_nodes(leaves: u32, collapse: WideCollapse) -> u32 {
+    match collapse {
+        // (4 · u32::MAX − 1) / 7 < u32::MAX.
+        WideCollapse::Greedy => ((4 * u64::from(leaves)).saturating_sub(1) / 7).max(1) as u32,
+        WideCollapse::Optimal => leaves.saturating_sub(1).max(1),
+    }
 }
 
-fn half_area(n: &BvhNode) -> f32 {
+pub(crate) fn half_area(n: &BvhNode) -> f32 {
     let e: [f32; 3] = std::array::from_fn(|a| n.max[a] - n.min[a]);
     e[0] * e[1] + e[1] * e[2] + e[2] * e[0]
 }
@@ -309,7 +319,7 @@ mod tests {
     fn wide_node_bound_holds_and_is_reached() {
         for leaves in 1..=300 {
             let wide = WideBvh::from_binary(&halving_tree(leaves)).unwrap();
-            let bound = max_wide_nodes(leaves) as usize;
+            let bound = max_wide_nodes(leaves, WideCollapse::Greedy) as usize;
             assert!(
                 wide.nodes.len() <= bound,
                 "{leaves} leaves: {} wide nodes, bound {bound}",
@@ -319,9 +329,17 @@ mod tests {
                 // 2·8^k leaves: 8-child nodes down to nodes over two leaves.
                 assert_eq!(wide.nodes.len(), bound, "{leaves} leaves");
             }
+            let bvh = halving_tree(leaves);
+            let optimal = WideBvh::from_binary_optimal(&bvh, &SahParams::default()).unwrap();
+            assert!(optimal.nodes.len() <= max_wide_nodes(leaves, WideCollapse::Optimal) as usize);
         }
-        assert_eq!(max_wide_nodes(16), 9);
-        assert_eq!(max_wide_nodes(u32::MAX), 2_454_267_025);
+        assert_eq!(max_wide_nodes(16, WideCollapse::Greedy), 9);
+        assert_eq!(
+            max_wide_nodes(u32::MAX, WideCollapse::Greedy),
+            2_454_267_025
+        );
+        assert_eq!(max_wide_nodes(16, WideCollapse::Optimal), 15);
+        assert_eq!(max_wide_nodes(1, WideCollapse::Optimal), 1);
     }
 
     #[test]

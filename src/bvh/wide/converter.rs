@@ -1,16 +1,22 @@
-//! The GPU binary-to-wide conversion, a build stage (pass "wide"): top-down, one wide node per
-//! invocation (`shaders/include/wide_collapse.wgsl`, CPU twin `WideBvh::from_binary`). The root
+//! The GPU binary-to-wide conversion, a build stage (pass "wide"). With the SAH-optimal collapse
+//! (`WideCollapse::Optimal`) two dispatches first compute its dynamic program bottom-up: `nodes_link` (parent
+//! links) and `costs_climb` (costs and choices per binary node). Then the wide nodes are emitted
+//! top-down, one per invocation (`shaders/include/wide_collapse.wgsl`; CPU twins
+//! `WideBvh::from_binary_optimal` and, greedy, `WideBvh::from_binary`). The root
 //! and the `START_LEVELS` levels below it (at most 8 and 64 wide nodes) are one direct dispatch
 //! of one workgroup; each of the next levels up to `level_dispatches` is an indirect dispatch
 //! whose size the previous level wrote (`wide_nodes_emit`); whatever lies deeper is emitted by
 //! one workgroup, level after level (`wide_nodes_finish`). No CPU round trip.
 
 use super::convert::max_wide_nodes;
+use super::costs_climb::{CostParams, COSTS_CLIMB};
+use super::nodes_link::NODES_LINK;
 use super::wide_nodes_emit::{WideParams, WIDE_NODES_EMIT};
 use super::wide_nodes_finish::WIDE_NODES_FINISH;
-use crate::bvh::BvhNode;
+use super::WideCollapse;
+use crate::bvh::{BvhNode, SahParams};
 use crate::device::{Tree, WideTree};
-use crate::gpu::GpuContext;
+use crate::gpu::{GpuContext, ItemCount};
 use crate::gpu::{Grid, Kernel, Recorder};
 use crate::Result;
 
@@ -23,18 +29,38 @@ const START_LEVELS: u32 = 2;
 const RECORD_WORDS: u32 = 8;
 
 pub struct WideConverter {
+    link: Kernel<crate::gpu::Items>,
+    costs: Kernel<CostParams>,
     emit: Kernel<WideParams>,
     finish: Kernel<WideParams>,
     forced_level_dispatches: Option<u32>,
+    collapse: WideCollapse,
+    /// Ci and Ct of the optimal collapse's costs.
+    sah: SahParams,
 }
 
 impl WideConverter {
-    pub fn new(ctx: &GpuContext) -> Self {
+    /// A converter with the default (greedy) collapse; the optimal one costs under `sah`'s Ci
+    /// and Ct.
+    pub fn new(ctx: &GpuContext, sah: &SahParams) -> Self {
         Self {
+            link: Kernel::new(ctx, &NODES_LINK),
+            costs: Kernel::climb(ctx, &COSTS_CLIMB),
             emit: Kernel::new(ctx, &WIDE_NODES_EMIT),
             finish: Kernel::new(ctx, &WIDE_NODES_FINISH),
             forced_level_dispatches: None,
+            collapse: WideCollapse::default(),
+            sah: *sah,
         }
+    }
+
+    /// The collapse of the next conversions.
+    pub fn set_collapse(&mut self, collapse: WideCollapse) {
+        self.collapse = collapse;
+    }
+
+    pub fn collapse(&self) -> WideCollapse {
+        self.collapse
     }
 
     /// Level dispatches for a tree of up to `prims` references on a device of this type: on a
@@ -67,24 +93,66 @@ impl WideConverter {
         let binary_nodes = (tree.nodes.size() / std::mem::size_of::<BvhNode>() as u64) as u32;
         let prims = (tree.prim_indices.size() / 4) as u32;
         // The tree in a buffer of n binary nodes has at most (n + 1) / 2 leaves.
-        let capacity = max_wide_nodes(binary_nodes.div_ceil(2));
+        let capacity = max_wide_nodes(binary_nodes.div_ceil(2), self.collapse);
         let level_dispatches = self
             .forced_level_dispatches
             .unwrap_or_else(|| Self::level_dispatches(prims, ctx.info.device_type));
         let record_bytes = u64::from(RECORD_WORDS * (MAX_WIDE_LEVEL_DISPATCHES + 2)) * 4;
         let fits = tree.wide.as_ref().is_some_and(|w| {
-            w.capacity >= capacity && w.prim_indices.size() >= u64::from(prims) * 4
+            w.capacity >= capacity
+                && w.prim_indices.size() >= u64::from(prims) * 4
+                && w.collapse.capacity >= binary_nodes
         });
         if !fits {
-            tree.wide = Some(WideTree::new(ctx, capacity, prims, record_bytes)?);
+            tree.wide = Some(WideTree::new(
+                ctx,
+                capacity,
+                prims,
+                binary_nodes,
+                record_bytes,
+            )?);
         }
         let wide = tree.wide.as_ref().expect("created above");
         rec.encoder().clear_buffer(&wide.counters, 0, None);
         for records in &wide.records {
             rec.encoder().clear_buffer(records, 0, None);
         }
+        let scratch = &wide.collapse;
+        let mut pass = rec.pass("wide");
+        if self.collapse == WideCollapse::Optimal {
+            let nodes = ItemCount::OnGpu {
+                buffer: &tree.counts,
+                capacity: binary_nodes,
+            };
+            pass.dispatch_counted(
+                &self.link,
+                nodes,
+                &[&tree.nodes, &scratch.parents, &scratch.arrivals],
+            );
+            let grid = self.costs.grid(ctx, binary_nodes);
+            pass.dispatch(
+                &self.costs,
+                grid,
+                &CostParams {
+                    count: binary_nodes,
+                    row_pitch: grid.row_pitch,
+                    ci: self.sah.ci,
+                    ct: self.sah.ct,
+                    zero: 0,
+                    _pad: [0; 3],
+                },
+                &[
+                    &tree.nodes,
+                    &scratch.parents,
+                    &scratch.arrivals,
+                    &scratch.costs,
+                    &scratch.choices,
+                    &tree.counts,
+                ],
+            );
+        }
         // Level L reads its record from records[L % 2] and writes the next into the other.
-        let buffers = |level: u32| -> [&wgpu::Buffer; 8] {
+        let buffers = |level: u32| -> [&wgpu::Buffer; 9] {
             [
                 &tree.nodes,
                 &tree.prim_indices,
@@ -94,6 +162,7 @@ impl WideConverter {
                 &wide.counters,
                 &wide.records[(level % 2) as usize],
                 &wide.records[((level + 1) % 2) as usize],
+                &scratch.choices,
             ]
         };
         let params = |level| WideParams {
@@ -101,8 +170,12 @@ impl WideConverter {
             level_dispatches,
             capacity: wide.capacity,
             zero: 0,
+            collapse: match self.collapse {
+                WideCollapse::Greedy => 0,
+                WideCollapse::Optimal => 1,
+            },
+            _pad: [0; 3],
         };
-        let mut pass = rec.pass("wide");
         // The root's dispatch writes the record of the level after its last one.
         let top = START_LEVELS.min(level_dispatches);
         pass.dispatch(

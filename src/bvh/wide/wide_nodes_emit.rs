@@ -17,8 +17,11 @@ pub struct WideParams {
     pub capacity: u32,
     /// Always 0: keeps the area products unfused.
     pub zero: u32,
+    /// 0: greedy, 1: optimal (`WideCollapse`).
+    pub collapse: u32,
+    pub _pad: [u32; 3],
 }
-const _: () = assert!(std::mem::size_of::<WideParams>() == 16);
+const _: () = assert!(std::mem::size_of::<WideParams>() == 32);
 
 kernel!(pub WIDE_NODES_EMIT: WideParams = "wide_nodes_emit"::"main", [64, 1, 1],
-    [Read, Read, ReadWrite, ReadWrite, ReadWrite, ReadWrite, Read, ReadWrite]);
+    [Read, Read, ReadWrite, ReadWrite, ReadWrite, ReadWrite, Read, ReadWrite, Read]);
