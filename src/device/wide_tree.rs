@@ -22,7 +22,8 @@ pub struct WideTree {
 }
 
 /// What the SAH-optimal collapse computes per binary node before the conversion (kernels
-/// `nodes_link` and `costs_climb`): 40 bytes per node of the binary tree's buffer.
+/// `nodes_link` and `costs_climb`): 40 bytes per node of the binary tree's buffer, allocated only
+/// for that collapse.
 pub struct CollapseScratch {
     pub parents: wgpu::Buffer,
     /// The climb's arrival counters.
@@ -53,7 +54,8 @@ impl CollapseScratch {
 
 impl WideTree {
     /// Buffers for `nodes` wide nodes, `prims` references, level records of `record_bytes` and
-    /// the optimal collapse of a binary tree of up to `binary_nodes` nodes.
+    /// the optimal collapse of a binary tree of up to `binary_nodes` nodes (1 where the
+    /// conversion is greedy: its kernels bind the choices but never read them).
     pub fn new(
         ctx: &GpuContext,
         nodes: u32,

@@ -94,6 +94,11 @@ impl WideConverter {
         let prims = (tree.prim_indices.size() / 4) as u32;
         // The tree in a buffer of n binary nodes has at most (n + 1) / 2 leaves.
         let capacity = max_wide_nodes(binary_nodes.div_ceil(2), self.collapse);
+        // The optimal collapse's scratch, per binary node (one word where the greedy one binds it).
+        let scratch_nodes = match self.collapse {
+            WideCollapse::Optimal => binary_nodes,
+            WideCollapse::Greedy => 1,
+        };
         let level_dispatches = self
             .forced_level_dispatches
             .unwrap_or_else(|| Self::level_dispatches(prims, ctx.info.device_type));
@@ -101,14 +106,14 @@ impl WideConverter {
         let fits = tree.wide.as_ref().is_some_and(|w| {
             w.capacity >= capacity
                 && w.prim_indices.size() >= u64::from(prims) * 4
-                && w.collapse.capacity >= binary_nodes
+                && w.collapse.capacity >= scratch_nodes
         });
         if !fits {
             tree.wide = Some(WideTree::new(
                 ctx,
                 capacity,
                 prims,
-                binary_nodes,
+                scratch_nodes,
                 record_bytes,
             )?);
         }
