@@ -475,3 +475,25 @@ fn leaves_too_large_for_the_layout_are_refused() {
     )];
     assert!(WideBvh::from_binary(&bvh).is_err());
 }
+
+/// An updater's wide collapse applies to its conversions whether it is set before or after the
+/// wide layout is chosen, and survives a switch to the binary layout and back.
+#[test]
+fn the_updater_keeps_its_wide_collapse() {
+    let mut updater = TreeUpdater::new(
+        gpu(),
+        UpdateMode::Rebuild(Builder::Lbvh),
+        &SahParams::default(),
+    )
+    .unwrap();
+    updater.set_wide_collapse(WideCollapse::Optimal);
+    updater.set_layout(gpu(), Layout::Wide);
+    let collapse = |u: &mut TreeUpdater| u.converter_mut().unwrap().collapse();
+    assert_eq!(collapse(&mut updater), WideCollapse::Optimal);
+    updater.set_layout(gpu(), Layout::Binary);
+    assert!(updater.converter_mut().is_none());
+    updater.set_layout(gpu(), Layout::Wide);
+    assert_eq!(collapse(&mut updater), WideCollapse::Optimal);
+    updater.set_wide_collapse(WideCollapse::Greedy);
+    assert_eq!(collapse(&mut updater), WideCollapse::Greedy);
+}

@@ -36,8 +36,9 @@ pub struct PanelInfo<'a> {
     pub triangles: u32,
     pub nodes: u32,
     pub references: u32,
-    /// The layout the tracer traces.
+    /// The layout the tracer traces, and the wide layout's collapse.
     pub layout: Layout,
+    pub wide_collapse: WideCollapse,
     /// (wide nodes, references) of the tree's wide layout, when it has one.
     pub wide_counts: Option<(u32, u32)>,
     pub samples: u32,
@@ -147,8 +148,12 @@ fn performance(ui: &mut egui::Ui, info: &PanelInfo) {
             ui.label("trace: –");
         }
     }
+    let collapse = match info.layout {
+        Layout::Binary => String::new(),
+        Layout::Wide => format!(", {} collapse", info.wide_collapse.name()),
+    };
     ui.label(format!(
-        "layout: {} ({})",
+        "layout: {} ({}{collapse})",
         info.layout.name(),
         layout_detail(info.layout)
     ));
@@ -274,11 +279,7 @@ fn size_text(bytes: u64) -> String {
 fn layout_detail(layout: Layout) -> String {
     match layout {
         Layout::Binary => format!("2-wide, {} B nodes", std::mem::size_of::<BvhNode>()),
-        Layout::Wide => format!(
-            "{WIDTH}-wide, {} B nodes, {} collapse",
-            std::mem::size_of::<WideNode>(),
-            WideCollapse::default().name()
-        ),
+        Layout::Wide => format!("{WIDTH}-wide, {} B nodes", std::mem::size_of::<WideNode>()),
     }
 }
 
@@ -326,9 +327,24 @@ fn bvh(ui: &mut egui::Ui, info: &PanelInfo, settings: &mut ViewSettings) {
         .response
         .on_hover_text(
             "The node layout traced: the builder's binary tree, or that tree converted on the \
-             GPU after every update into the compressed 8-wide layout (Ylitie et al. 2017, \
-             greedy collapse; stage \"wide\" among the build times)",
+             GPU after every update into the compressed 8-wide layout (Ylitie et al. 2017; \
+             stage \"wide\" among the build times)",
         );
+    ui.add_enabled_ui(settings.layout == Layout::Wide, |ui| {
+        egui::ComboBox::from_label("wide collapse")
+            .selected_text(settings.wide_collapse.name())
+            .show_ui(ui, |ui| {
+                for &collapse in WideCollapse::ALL {
+                    ui.selectable_value(&mut settings.wide_collapse, collapse, collapse.name());
+                }
+            })
+            .response
+            .on_hover_text(
+                "How the conversion picks a wide node's children: greedy (open the largest \
+                 child until 8 slots are taken) or optimal (Ylitie et al.'s SAH-optimal \
+                 dynamic program, two more GPU passes: fewer wide nodes, a lower wide SAH)",
+            );
+    });
     ui.add_enabled(
         settings.builder.is_gpu(),
         egui::Checkbox::new(&mut settings.rebuild_every_frame, "rebuild every frame"),

@@ -1,7 +1,7 @@
-//! The viewer's user-adjustable settings (builder or refit mode, leaf size, node layout, samples
-//! per frame, bounces, per-frame rebuild). Any change to them restarts accumulation.
+//! The viewer's user-adjustable settings (builder or refit mode, leaf size, node layout and the
+//! wide layout's collapse, samples per frame, bounces, per-frame rebuild). Any change to them restarts accumulation.
 
-use crate::bvh::wide::{Layout, MAX_WIDE_LEAF_SIZE};
+use crate::bvh::wide::{Layout, WideCollapse, MAX_WIDE_LEAF_SIZE};
 use crate::bvh::SahParams;
 use crate::bvh::UpdateMode;
 
@@ -13,6 +13,8 @@ pub struct ViewSettings {
     /// The node layout traced: the builder's binary tree, or that tree converted to the
     /// compressed 8-wide layout after every update.
     pub layout: Layout,
+    /// How the wide layout's conversion collapses the binary tree.
+    pub wide_collapse: WideCollapse,
     pub samples_per_frame: u32,
     /// Diffuse bounces after the primary hit (the tracer's `max_depth` is this + 1).
     pub max_bounces: u32,
@@ -33,6 +35,7 @@ impl ViewSettings {
             builder,
             max_leaf_size: SahParams::default().max_leaf_size,
             layout: Layout::Binary,
+            wide_collapse: WideCollapse::default(),
             samples_per_frame: 1,
             max_bounces: 3,
             rebuild_every_frame: builder.is_gpu(),

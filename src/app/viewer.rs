@@ -103,6 +103,7 @@ impl Viewer {
             .unwrap_or_else(|| default_update_mode(ctx.info.device_type));
         let settings = ViewSettings::new(mode_for_scene(&options.scene, requested));
         let mut updater = TreeUpdater::new(ctx, settings.builder, &settings.sah_params())?;
+        updater.set_wide_collapse(settings.wide_collapse);
         updater.set_layout(ctx, settings.layout);
         let loaded = load_and_build(ctx, &options.scene, &mut updater)?;
         let mut viewer = Self {
@@ -165,6 +166,7 @@ impl Viewer {
             nodes: self.tree_counts.0,
             references: self.tree_counts.1,
             layout: self.traced_layout(),
+            wide_collapse: self.applied.wide_collapse,
             wide_counts: self.wide_counts,
             samples: self.tracer.as_ref().map_or(0, |t| t.samples_done()),
             resolution: (width, height),
@@ -463,6 +465,7 @@ impl Viewer {
         if mode != self.applied.builder {
             match TreeUpdater::new(ctx, mode, &self.applied.sah_params()) {
                 Ok(mut updater) => {
+                    updater.set_wide_collapse(self.applied.wide_collapse);
                     updater.set_layout(ctx, self.applied.layout);
                     self.updater = updater;
                     self.applied.select_builder(mode);
@@ -516,6 +519,7 @@ impl Viewer {
         if wanted.builder != self.applied.builder {
             match TreeUpdater::new(ctx, wanted.builder, &wanted.sah_params()) {
                 Ok(mut updater) => {
+                    updater.set_wide_collapse(wanted.wide_collapse);
                     updater.set_layout(ctx, wanted.layout);
                     self.updater = updater;
                     self.tree_dirty = true;
@@ -535,6 +539,11 @@ impl Viewer {
             // The next update converts the tree (or drops its wide layout); `fit_tracer` makes a
             // tracer of the new layout, and this frame's build precedes its trace.
             self.updater.set_layout(ctx, wanted.layout);
+            self.tree_dirty = true;
+        }
+        if wanted.wide_collapse != self.applied.wide_collapse {
+            // Converted again by the next update (a binary layout keeps it for later).
+            self.updater.set_wide_collapse(wanted.wide_collapse);
             self.tree_dirty = true;
         }
         self.applied = wanted;

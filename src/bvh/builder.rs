@@ -167,10 +167,8 @@ impl Builder {
             Builder::Lbvh | Builder::Trbvh(_) | Builder::TrbvhSplit(_) => {
                 let mut tree = Tree::empty(ctx)?;
                 let mut updater = TreeUpdater::new(ctx, UpdateMode::Rebuild(self), params)?;
+                updater.set_wide_collapse(collapse);
                 updater.set_layout(ctx, layout);
-                if let Some(converter) = updater.converter_mut() {
-                    converter.set_collapse(collapse);
-                }
                 updater.set_round_schedule(schedule);
                 let passes = updater.pass_count();
                 let mut slab = ParamSlab::new(ctx);

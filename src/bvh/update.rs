@@ -10,7 +10,7 @@ use std::time::Instant;
 use super::lbvh::{LbvhBuilder, LBVH_PASSES};
 use super::nodes_refit::{derive_refit_links, NodesRefit};
 use super::treelet::{RoundSchedule, TrbvhBuilder, TreeletSettings};
-use super::wide::{Layout, WideConverter, MAX_WIDE_LEAF_SIZE};
+use super::wide::{Layout, WideCollapse, WideConverter, MAX_WIDE_LEAF_SIZE};
 use super::{build_sbvh, build_sweep_sah, Builder, SahParams};
 use crate::device::{Geometry, Tree};
 use crate::gpu::{GpuContext, Recorder, StageTime};
@@ -112,6 +112,8 @@ pub struct TreeUpdater {
     sah: SahParams,
     /// Wide layout: the conversion that follows every update.
     converter: Option<WideConverter>,
+    /// The wide conversion's collapse (kept while the layout is binary).
+    wide_collapse: WideCollapse,
 }
 
 impl TreeUpdater {
@@ -137,6 +139,7 @@ impl TreeUpdater {
             rebuild_topology: true,
             sah: *sah,
             converter: None,
+            wide_collapse: WideCollapse::default(),
         })
     }
 
@@ -144,11 +147,24 @@ impl TreeUpdater {
     pub fn set_layout(&mut self, ctx: &GpuContext, layout: Layout) {
         self.converter = match layout {
             Layout::Binary => None,
-            Layout::Wide => self
-                .converter
-                .take()
-                .or_else(|| Some(WideConverter::new(ctx, &self.sah))),
+            Layout::Wide => {
+                let mut converter = self
+                    .converter
+                    .take()
+                    .unwrap_or_else(|| WideConverter::new(ctx, &self.sah));
+                converter.set_collapse(self.wide_collapse);
+                Some(converter)
+            }
         };
+    }
+
+    /// How the wide layout's conversions collapse the binary tree (now and after a later
+    /// `set_layout`).
+    pub fn set_wide_collapse(&mut self, collapse: WideCollapse) {
+        self.wide_collapse = collapse;
+        if let Some(converter) = &mut self.converter {
+            converter.set_collapse(collapse);
+        }
     }
 
     pub fn layout(&self) -> Layout {

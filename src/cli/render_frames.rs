@@ -94,10 +94,8 @@ pub fn run(gpu: &GpuContext, args: &RenderArgs, frames: u32) -> Result<()> {
     let mut tree = Tree::empty(gpu)?;
     let layout = args.trace.single_layout()?;
     let mut updater = TreeUpdater::new(gpu, mode, &params)?;
+    updater.set_wide_collapse(args.trace.single_wide_collapse()?);
     updater.set_layout(gpu, layout);
-    if let Some(converter) = updater.converter_mut() {
-        converter.set_collapse(args.trace.single_wide_collapse()?);
-    }
     let mut tracer = PathTracer::new(gpu, args.trace.render_settings(layout))?;
     let mut slab = ParamSlab::new(gpu);
     let bar = ProgressBar::new(u64::from(frames));
