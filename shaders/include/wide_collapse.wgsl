@@ -1,6 +1,7 @@
-// Binary-to-wide conversion, one wide node per invocation (CPU twin: `WideBvh::from_binary`,
-// src/bvh/wide/convert.rs; the kernels wide_nodes_emit.wgsl and wide_nodes_finish.wgsl run it
-// level by level, top-down). Wide node w is made from binary node `wide_sources[w]`:
+// Binary-to-wide conversion, one wide node per invocation (CPU twins: `WideBvh::from_binary` and
+// `WideBvh::from_binary_optimal`, src/bvh/wide/convert.rs; the kernels wide_nodes_emit.wgsl and
+// wide_nodes_finish.wgsl run it level by level, top-down). Wide node w is made from binary node
+// `wide_sources[w]`:
 // 1. Children, by one of two collapses (`params.collapse`):
 //    - optimal: the split of 8 slots that costs_climb.wgsl chose for the binary node, each part
 //      expanded by its node's choices (collapse_choices.wgsl), left before right: Ylitie et al.'s

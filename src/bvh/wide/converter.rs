@@ -1,8 +1,8 @@
 //! The GPU binary-to-wide conversion, a build stage (pass "wide"). With the SAH-optimal collapse
-//! (`WideCollapse::Optimal`) two dispatches first compute its dynamic program bottom-up: `nodes_link` (parent
-//! links) and `costs_climb` (costs and choices per binary node). Then the wide nodes are emitted
-//! top-down, one per invocation (`shaders/include/wide_collapse.wgsl`; CPU twins
-//! `WideBvh::from_binary_optimal` and, greedy, `WideBvh::from_binary`). The root
+//! (`WideCollapse::Optimal`) two dispatches first compute its dynamic program bottom-up:
+//! `nodes_link` (parent links) and `costs_climb` (costs and choices per binary node). Then the
+//! wide nodes are emitted top-down, one per invocation (`shaders/include/wide_collapse.wgsl`; CPU
+//! twins `WideBvh::from_binary` for the greedy collapse, `WideBvh::from_binary_optimal`). The root
 //! and the `START_LEVELS` levels below it (at most 8 and 64 wide nodes) are one direct dispatch
 //! of one workgroup; each of the next levels up to `level_dispatches` is an indirect dispatch
 //! whose size the previous level wrote (`wide_nodes_emit`); whatever lies deeper is emitted by
@@ -16,7 +16,7 @@ use super::wide_nodes_finish::WIDE_NODES_FINISH;
 use super::WideCollapse;
 use crate::bvh::{BvhNode, SahParams};
 use crate::device::{Tree, WideTree};
-use crate::gpu::{GpuContext, ItemCount};
+use crate::gpu::{GpuContext, ItemCount, Items};
 use crate::gpu::{Grid, Kernel, Recorder};
 use crate::Result;
 
@@ -29,7 +29,7 @@ const START_LEVELS: u32 = 2;
 const RECORD_WORDS: u32 = 8;
 
 pub struct WideConverter {
-    link: Kernel<crate::gpu::Items>,
+    link: Kernel<Items>,
     costs: Kernel<CostParams>,
     emit: Kernel<WideParams>,
     finish: Kernel<WideParams>,
