@@ -84,7 +84,7 @@ step tests 150 bash -c tests
 step schedules 150 env SCENES="${SCHEDULE_SCENES:-conference crytek_sponza sibenik lost_empire field:224 field:707 field:2000}" \
   LEVELS="${LEVELS:-10,12,14,16,18,20}" TEAMS="${TEAMS:-0}" CLIMBS=" " REPEATS=11 bash scripts/gpu-schedules.sh
 step scaling 80 bash -c scaling
-step layouts 70 env SCENES="conference crytek_sponza sibenik lost_empire armadillo" OPTIMAL_SCENES=" " \
+step layouts 80 env SCENES="conference crytek_sponza sibenik lost_empire armadillo" OPTIMAL_SCENES="conference lost_empire" \
   REPEATS=11 bash scripts/gpu-layouts.sh
 step profile 60 env SCENES="conference field:707 field:2000" TILES="default 8 16 32" BUILDERS=lbvh \
   REPEATS=5 bash scripts/gpu-profile.sh
