@@ -4,11 +4,12 @@
 // wide nodes, one wave of the workgroup each, so these levels cost no dispatch of their own.
 // Level L > top (an indirect dispatch of the size level L − 1 wrote) emits the wide nodes
 // [first, end) of its record, the workgroups striding over them a wave at a time (one device
-// atomic per wave and counter allocates the wave's children and references). The last level of a dispatch
-// writes the record of the next: first = end of this level (the children allocated here follow
-// it), end = the largest end of those children, and max(1, ceil((end − first) / 64)) workgroups
-// (capped; the invocations stride), so every level dispatch runs and passes `first` on even
-// when a level is empty.
+// atomic per wave and counter allocates the wave's children and references). The last level of a
+// dispatch writes the record of the next: first = end of this level (the children allocated here
+// follow it), end = the largest end of those children, and ceil((end − first) / 64) workgroups
+// (capped; the invocations stride): none once a level allocates no children, so the level
+// dispatches past the tree's depth cost only their launch. Each dispatch raises wide_counters[3]
+// to the end of the nodes it emitted, where wide_nodes_finish.wgsl starts.
 #include "wide_collapse.wgsl"
 
 fn size_next_level(level: u32, first: u32, children_end: u32) {
@@ -18,7 +19,6 @@ fn size_next_level(level: u32, first: u32, children_end: u32) {
 }
 
 fn open_next_level(level: u32, first: u32) {
-    atomicMax(&next_level[record_word(level + 1u, 0u)], 1u);
     atomicStore(&next_level[record_word(level + 1u, 1u)], 1u);
     atomicStore(&next_level[record_word(level + 1u, 2u)], 1u);
     atomicMax(&next_level[record_word(level + 1u, 3u)], first);
@@ -64,12 +64,16 @@ fn main(
             first = end;
             end = workgroupUniformLoad(&start_end);
         }
+        if lid == 0u {
+            atomicMax(&wide_counters[3], first);
+        }
         return;
     }
     let first = this_level[record_word(params.level, 3u)];
     let end = max(this_level[record_word(params.level, 4u)], first);
     if gid.x == 0u {
         open_next_level(params.level, end);
+        atomicMax(&wide_counters[3], end);
     }
     // The workgroups stride over the level's nodes a wave at a time.
     let stride = groups.x * EMIT_WORKGROUP;

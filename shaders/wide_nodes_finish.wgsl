@@ -1,6 +1,6 @@
-// The levels of the binary-to-wide conversion after the last level dispatch, in one workgroup
-// (bound with the record of level level_dispatches + 1 as `this_level`): it emits the wide
-// nodes from the first one no level dispatch reached to the current end of the allocation, then
+// The levels of the binary-to-wide conversion after the last level dispatch, in one workgroup:
+// it emits the wide nodes from the first one no level dispatch reached (wide_counters[3], the
+// end of what they emitted) to the current end of the allocation, then
 // the nodes those allocated, and so on until no level adds any (a barrier between levels orders
 // the sources). Deep, narrow tails of the tree cost one wave per level here instead of one
 // dispatch each.
@@ -9,10 +9,14 @@
 const FINISH_WORKGROUP: u32 = 256u;
 
 var<workgroup> level_end: u32;
+var<workgroup> emitted_end: u32;
 
 @compute @workgroup_size(256)
 fn main(@builtin(local_invocation_index) lid: u32) {
-    var first = this_level[record_word(params.level_dispatches + 1u, 3u)];
+    if lid == 0u {
+        emitted_end = atomicLoad(&wide_counters[3]);
+    }
+    var first = workgroupUniformLoad(&emitted_end);
     loop {
         if lid == 0u {
             // An overflow (capacity too small) ends the conversion.

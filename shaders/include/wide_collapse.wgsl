@@ -52,7 +52,8 @@ const COLLAPSE_OPTIMAL: u32 = 1u;
 @group(0) @binding(4) var<storage, read_write> wide_prims: array<u32>;
 // Binary node of each wide node.
 @group(0) @binding(5) var<storage, read_write> wide_sources: array<u32>;
-// [0] wide nodes allocated, [1] references written, [2] capacity overflows.
+// [0] wide nodes allocated, [1] references written, [2] capacity overflows, [3] the end of the
+// wide nodes the level dispatches emitted (the finish starts there).
 @group(0) @binding(6) var<storage, read_write> wide_counters: array<atomic<u32>>;
 // Level records, 8 words per level: [workgroups x, y, z, first node, end node, 0, 0, 0]; even
 // levels in one buffer, odd in the other, so that a level dispatch reads its own record (and

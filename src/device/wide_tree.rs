@@ -1,6 +1,6 @@
 //! A compressed wide BVH on the GPU (layout of `bvh::wide::WideNode`), converted from a binary
 //! `Tree` by `bvh::wide::WideConverter`. `counters` holds [nodes, references, capacity
-//! overflows] as the GPU wrote them; `records` the conversion's per-level records (indirect
+//! overflows, end of the level dispatches' nodes] as the GPU wrote them; `records` the conversion's per-level records (indirect
 //! dispatch arguments; even levels in the first buffer, odd in the second); `collapse` the
 //! optimal collapse's scratch, per binary node. The buffers grow to what a conversion needs and
 //! are reused.
@@ -72,7 +72,7 @@ impl WideTree {
             )?,
             prim_indices: storage_buffer_zeroed(ctx, "wide prim indices", u64::from(prims) * 4)?,
             sources: storage_buffer_zeroed(ctx, "wide sources", u64::from(nodes) * 4)?,
-            counters: storage_buffer_zeroed(ctx, "wide counters", 12)?,
+            counters: storage_buffer_zeroed(ctx, "wide counters", 16)?,
             records: [
                 indirect_buffer_zeroed(ctx, "wide records (even levels)", record_bytes)?,
                 indirect_buffer_zeroed(ctx, "wide records (odd levels)", record_bytes)?,
