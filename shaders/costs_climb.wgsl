@@ -35,7 +35,7 @@ override WORKGROUP_WIDTH: u32 = 64u;
 @group(0) @binding(1) var<storage, read> nodes: array<BvhNode>;
 @group(0) @binding(2) var<storage, read> parents: array<u32>;
 @group(0) @binding(3) var<storage, read_write> arrivals: array<atomic<u32>>;
-// C(n, 1..=7) of each internal node n, f32 bits, COST_WORDS words per node.
+// C(n, 1..=7) of each internal node n, f32 bits, COLLAPSE_COST_WORDS words per node.
 @group(0) @binding(4) var<storage, read_write> costs: array<atomic<u32>>;
 @group(0) @binding(5) var<storage, read_write> choices: array<u32>;
 @group(0) @binding(6) var<storage, read> count_limit: array<u32>;
@@ -56,7 +56,7 @@ fn child_costs(child: u32) -> Costs {
         let leaf = params.ct * half_area(node.min, node.max, params.zero) * f32(node.right_or_count & ~LEAF_FLAG);
         return Costs(vec4<f32>(leaf), vec3<f32>(leaf));
     }
-    let w = child * COST_WORDS;
+    let w = child * COLLAPSE_COST_WORDS;
     let low = vec4<u32>(atomicLoad(&costs[w]), atomicLoad(&costs[w + 1u]), atomicLoad(&costs[w + 2u]), atomicLoad(&costs[w + 3u]));
     let high = vec3<u32>(atomicLoad(&costs[w + 4u]), atomicLoad(&costs[w + 5u]), atomicLoad(&costs[w + 6u]));
     return Costs(bitcast<vec4<f32>>(low), bitcast<vec3<f32>>(high));
@@ -125,7 +125,7 @@ fn finish_parent(parent: u32) {
     let c5 = take(c4, split5, 5u, &choice_word);
     let c6 = take(c5, split6, 6u, &choice_word);
     let c7 = take(c6, split7, 7u, &choice_word);
-    let w = parent * COST_WORDS;
+    let w = parent * COLLAPSE_COST_WORDS;
     atomicStore(&costs[w], bitcast<u32>(c1));
     atomicStore(&costs[w + 1u], bitcast<u32>(c2));
     atomicStore(&costs[w + 2u], bitcast<u32>(c3));

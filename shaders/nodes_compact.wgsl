@@ -37,8 +37,6 @@ struct CompactParams {
 // Per working leaf, its output leaf and its position there (NO_SLOT: none; nodes_mark.wgsl).
 @group(0) @binding(12) var<storage, read> leaf_slots: array<vec2<u32>>;
 
-const NO_SLOT: u32 = 0xffffffffu;
-
 const KEPT: u32 = 0u;
 const LEAF_PRIMS: u32 = 1u;
 

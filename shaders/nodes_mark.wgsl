@@ -53,8 +53,6 @@ struct CollapseParams {
 // first primitive in that leaf's range (NO_SLOT: a repeated triangle, not written).
 @group(0) @binding(10) var<storage, read_write> leaf_slots: array<vec2<u32>>;
 
-const NO_SLOT: u32 = 0xffffffffu;
-
 // The stack holds disjoint subtrees of the output leaf's, each of at least one reference.
 const GATHER_STACK: u32 = MAX_GPU_LEAF_SIZE;
 

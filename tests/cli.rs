@@ -291,14 +291,14 @@ fn bench_converts_by_both_wide_collapses() {
     let wide_dispatches =
         |run: &serde_json::Value| run["stages_dispatches"]["wide"].as_u64().unwrap();
     assert_eq!(wide_dispatches(optimal), wide_dispatches(greedy) + 2);
-    let refused = treelet(&["bench", "--scene", "cornell", "--wide-collapse", "greedy"]);
-    assert!(!refused.status.success());
-    let stderr = String::from_utf8_lossy(&refused.stderr);
-    assert!(stderr.contains("applies to the wide layout"), "{stderr}");
-    let unknown = treelet(&["bench", "--scene", "cornell", "--wide-collapse", "best"]);
-    assert!(!unknown.status.success());
-    let stderr = String::from_utf8_lossy(&unknown.stderr);
-    assert!(stderr.contains("unknown wide collapse 'best'"), "{stderr}");
+    assert_clean_failure(
+        &["bench", "--scene", "cornell", "--wide-collapse", "greedy"],
+        "applies to the wide layout",
+    );
+    assert_clean_failure(
+        &["bench", "--scene", "cornell", "--wide-collapse", "best"],
+        "unknown wide collapse 'best'",
+    );
 }
 
 /// `bench --profile-dispatches` times every dispatch on its own: `dispatch_ms` lists them in

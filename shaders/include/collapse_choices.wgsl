@@ -4,10 +4,9 @@
 // over at most i slots of the wide node above it. For i in 2..=7, bits 3(i − 2)..3(i − 2) + 3
 // hold C(n, i)'s choice: 0 = i − 1 slots do as well, k = k slots for the left child and i − k
 // for the right. Bits 18..21 hold the k of n made a wide node itself (its 8 slots split).
-// C(n, 8) is never asked for: a parent gives a child at most 7 slots.
+// C(n, 8) is never asked for: a parent gives a child at most 7 slots (the COLLAPSE_COST_WORDS
+// costs per node, constants.wgsl).
 
-// Words of collapse costs per binary node: C(n, 1..=7).
-const COST_WORDS: u32 = 7u;
 const CHOICE_WIDE_SHIFT: u32 = 18u;
 
 // C(n, slots)'s choice, slots in 2..=7.

@@ -163,31 +163,28 @@ fn draft_wide_node(source: u32) -> WideDraft {
         child[0] = nodes[top.left_or_first];
         child[1] = nodes[top.right_or_count];
         count = 2u;
-    }
-    loop {
-        if count == 8u || params.collapse == COLLAPSE_OPTIMAL {
-            break;
-        }
-        var widest = 8u;
-        var widest_area = -1.0;
-        for (var j = 0u; j < count; j++) {
-            if (child[j].right_or_count & LEAF_FLAG) == 0u {
-                let a = half_area(child[j].min, child[j].max, params.zero);
-                if a > widest_area {
-                    widest = j;
-                    widest_area = a;
+        while count < 8u {
+            var widest = 8u;
+            var widest_area = -1.0;
+            for (var j = 0u; j < count; j++) {
+                if (child[j].right_or_count & LEAF_FLAG) == 0u {
+                    let a = half_area(child[j].min, child[j].max, params.zero);
+                    if a > widest_area {
+                        widest = j;
+                        widest_area = a;
+                    }
                 }
             }
+            if widest == 8u {
+                break;
+            }
+            let opened = child[widest];
+            child_index[widest] = opened.left_or_first;
+            child_index[count] = opened.right_or_count;
+            child[widest] = nodes[opened.left_or_first];
+            child[count] = nodes[opened.right_or_count];
+            count++;
         }
-        if widest == 8u {
-            break;
-        }
-        let opened = child[widest];
-        child_index[widest] = opened.left_or_first;
-        child_index[count] = opened.right_or_count;
-        child[widest] = nodes[opened.left_or_first];
-        child[count] = nodes[opened.right_or_count];
-        count++;
     }
 
     var lo = child[0].min;

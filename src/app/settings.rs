@@ -1,5 +1,6 @@
 //! The viewer's user-adjustable settings (builder or refit mode, leaf size, node layout and the
-//! wide layout's collapse, samples per frame, bounces, per-frame rebuild). Any change to them restarts accumulation.
+//! wide layout's collapse, samples per frame, bounces, per-frame rebuild). Any change to them
+//! restarts accumulation.
 
 use crate::bvh::wide::{Layout, WideCollapse, MAX_WIDE_LEAF_SIZE};
 use crate::bvh::SahParams;

@@ -1,11 +1,12 @@
 //! A compressed wide BVH on the GPU (layout of `bvh::wide::WideNode`), converted from a binary
 //! `Tree` by `bvh::wide::WideConverter`. `counters` holds [nodes, references, capacity
-//! overflows, end of the level dispatches' nodes] as the GPU wrote them; `records` the conversion's per-level records (indirect
-//! dispatch arguments; even levels in the first buffer, odd in the second); `collapse` the
-//! optimal collapse's scratch, per binary node. The buffers grow to what a conversion needs and
-//! are reused.
+//! overflows, end of the level dispatches' nodes] as the GPU wrote them; `records` the
+//! conversion's per-level records (indirect dispatch arguments; even levels in the first buffer,
+//! odd in the second); `collapse` the optimal collapse's scratch, per binary node. The buffers
+//! grow to what a conversion needs and are reused.
 
 use crate::bvh::wide::{WideBvh, WideNode};
+use crate::gpu::constants::COLLAPSE_COST_WORDS;
 use crate::gpu::{indirect_buffer_zeroed, read_buffer, storage_buffer_zeroed, GpuContext};
 use crate::{Error, Result};
 
@@ -28,7 +29,7 @@ pub struct CollapseScratch {
     pub parents: wgpu::Buffer,
     /// The climb's arrival counters.
     pub arrivals: wgpu::Buffer,
-    /// C(n, 1..=7), f32 (`COST_WORDS` in collapse_choices.wgsl).
+    /// C(n, 1..=7), f32 (`COLLAPSE_COST_WORDS` per node).
     pub costs: wgpu::Buffer,
     /// One word of choices per node (collapse_choices.wgsl).
     pub choices: wgpu::Buffer,
@@ -36,16 +37,17 @@ pub struct CollapseScratch {
     pub capacity: u32,
 }
 
-/// Collapse costs per binary node (`COST_WORDS` in collapse_choices.wgsl).
-pub const COLLAPSE_COST_WORDS: u64 = 7;
-
 impl CollapseScratch {
     fn new(ctx: &GpuContext, binary_nodes: u32) -> Result<Self> {
         let n = u64::from(binary_nodes.max(1));
         Ok(Self {
             parents: storage_buffer_zeroed(ctx, "collapse parents", n * 4)?,
             arrivals: storage_buffer_zeroed(ctx, "collapse arrivals", n * 4)?,
-            costs: storage_buffer_zeroed(ctx, "collapse costs", n * 4 * COLLAPSE_COST_WORDS)?,
+            costs: storage_buffer_zeroed(
+                ctx,
+                "collapse costs",
+                n * 4 * u64::from(COLLAPSE_COST_WORDS),
+            )?,
             choices: storage_buffer_zeroed(ctx, "collapse choices", n * 4)?,
             capacity: binary_nodes.max(1),
         })

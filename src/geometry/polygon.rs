@@ -55,7 +55,8 @@ impl<const N: usize> Polygon<N> {
     /// The part in `keep` of the plane where coordinate `axis` equals `plane`: each vertex inside
     /// is kept and each edge between inside and outside adds its crossing point, `a + (b − a)·t`
     /// with `t = (plane − a) / (b − a)` along the axis, clamped into the box of the edge's ends
-    /// (rounding cannot move it off the edge's box) and with the axis coordinate set to the plane's.
+    /// (rounding cannot move it off the edge's box) and with the axis coordinate set to the
+    /// plane's.
     pub fn clip(&self, axis: usize, plane: f64, keep: HalfSpace) -> Self {
         let mut out = Self {
             vertices: [DVec3::ZERO; N],

@@ -47,6 +47,9 @@ pub const MIN_TREELET_SIZE: u32 = 3;
 /// Treelet levels a restructuring round gives one dispatch each at most; the levels above are
 /// climbed by one workgroup (`bvh::treelet`).
 pub const MAX_LEVEL_DISPATCHES: u32 = 32;
+/// Costs per binary node of the SAH-optimal wide collapse, C(n, 1..=7): the slot counts a wide
+/// node's expansion can give a child (`bvh::wide::OptimalCollapse`, costs_climb.wgsl).
+pub const COLLAPSE_COST_WORDS: u32 = 7;
 /// Largest leaf the GPU collapse may create (its gather stack holds a leaf's subtree).
 pub const MAX_GPU_LEAF_SIZE: u32 = 32;
 /// Widening of a box's exit distance in the traversal's box test (Ize 2013): rounding never culls
@@ -78,12 +81,16 @@ pub fn wgsl() -> String {
         u32_const("SPLIT_SCALE_WORD", SPLIT_SCALE_WORD),
         u32_const("MAX_TREELET", MAX_TREELET_SIZE),
         u32_const("MAX_GPU_LEAF_SIZE", MAX_GPU_LEAF_SIZE),
+        u32_const("COLLAPSE_COST_WORDS", COLLAPSE_COST_WORDS),
         u32_const("MAX_LEVEL_DISPATCHES", MAX_LEVEL_DISPATCHES),
         f32_const("BOX_EXIT_SLACK", BOX_EXIT_SLACK),
         u32_const("RADIX_BITS", RADIX_BITS),
         u32_const("SCAN_BLOCK", SCAN_BLOCK),
         u32_const("REDUCE_TILE", REDUCE_TILE),
         f32_const("F32_MAX", f32::MAX),
+        // A working leaf without a slot in its output leaf (a repeated triangle; `leaf_slots` of
+        // nodes_mark.wgsl and nodes_compact.wgsl).
+        u32_const("NO_SLOT", u32::MAX),
     ]
     .concat()
 }

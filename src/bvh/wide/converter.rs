@@ -67,10 +67,10 @@ impl WideConverter {
     /// GPU about every level a deep tree has, log2 of the references plus 2 (the tail's one
     /// workgroup runs on one multiprocessor: with log8 + 4 levels dispatched, conference's wide
     /// stage took 4.7-5.3 ms on an H200 against 0.5-0.8 ms for the other shared scenes, whose
-    /// trees are shallower; a level past the tree's depth launches no workgroups); on a CPU device, where that
-    /// workgroup is one thread, log8 + 8 (lavapipe, trbvh trees, the stage in three alternating
-    /// runs against log8 + 4: conference 47-48 -> 36-39 ms, crytek_sponza 30-33 -> 28-29 ms,
-    /// lost_empire unchanged).
+    /// trees are shallower; a level past the tree's depth launches no workgroups); on a CPU
+    /// device, where that workgroup is one thread, log8 + 8 (lavapipe, trbvh trees, the stage in
+    /// three alternating runs against log8 + 4: conference 47-48 -> 36-39 ms, crytek_sponza
+    /// 30-33 -> 28-29 ms, lost_empire unchanged).
     pub fn level_dispatches(prims: u32, device: wgpu::DeviceType) -> u32 {
         let prims = prims.max(1);
         let levels = match device {

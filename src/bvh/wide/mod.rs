@@ -2,8 +2,9 @@
 //! Through Compressed Wide BVHs" (HPG 2017): the 8-wide, 80-byte node layout with quantized child
 //! boxes (`node`), the conversion of any binary tree into it on the GPU (`WideConverter`, a build
 //! stage) by a greedy collapse (CPU twin `WideBvh::from_binary`) or the paper's SAH-optimal one
-//! (`OptimalCollapse`; CPU twin `WideBvh::from_binary_optimal`), and the validator. The traversal is `shaders/include/wide_traverse.wgsl`; `Layout` says which layout a
-//! tracer uses, `WideCollapse` how the conversion picks a wide node's children.
+//! (`OptimalCollapse`; CPU twin `WideBvh::from_binary_optimal`), and the validator. The
+//! traversal is `shaders/include/wide_traverse.wgsl`; `Layout` says which layout a tracer uses,
+//! `WideCollapse` how the conversion picks a wide node's children.
 
 mod convert;
 mod converter;

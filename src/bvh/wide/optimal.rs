@@ -16,11 +16,13 @@ use super::convert::half_area;
 use super::node::WIDTH;
 use super::sah::collapse_cost;
 use crate::bvh::{Bvh, BvhNode, SahParams};
+use crate::gpu::constants::COLLAPSE_COST_WORDS;
 
 /// What C(n, i) chose: fewer slots (i − 1), or a split with k slots for the left child.
 const FEWER: u8 = 0;
-/// Slot counts a child can be given (C(n, 1..=7)).
+/// Slot counts a child can be given (C(n, 1..=7)), as many as the GPU stores costs per node.
 const CHILD_SLOTS: usize = WIDTH - 1;
+const _: () = assert!(CHILD_SLOTS == COLLAPSE_COST_WORDS as usize);
 
 /// The optimal collapse of one binary tree: each node's costs and choices.
 pub struct OptimalCollapse {
