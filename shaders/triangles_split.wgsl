@@ -1,20 +1,26 @@
 // Pre-splitting step 3 (Karras & Aila 2013, §5): each triangle becomes its s_t + 1 references.
-// Pieces are split recursively at the coarsest Morton-grid plane crossing the piece (see
-// `split_plane`; planes on the power-of-two subdivision of the scene's cubic grid, so neighbouring
-// triangles' splits agree). A piece carries the grid cells it covers as integers: the side cut at
-// a plane ends exactly at that plane's cell, whatever the rounding of the plane's position and of
-// the grid scale (a float cell range would put a side that ends on the plane into the next cell on
-// some devices, and the piece would then be "split" at its own side again, emitting copies of one
-// box). Each side is the box of the triangle's part on that side of the plane (its vertices
-// there and its edges' crossings of the plane) intersected with the piece box's side, as the
-// paper and SBVH's reference splits do. Clipping the triangle to each side box instead (a
-// polygon in a private array) made the kernel 3-4x slower on lavapipe for boxes that are tighter
-// only where the triangle reaches beyond the piece (SAH within 0.8 %; README, "Pre-splitting
-// against SBVH"). The remaining pieces are shared by the sides' extents in cells (integer
-// arithmetic, rounded half up). A piece that cannot be split (inside one grid cell, or a side
-// left empty) is emitted as often as it still owes references, so every triangle writes exactly
-// its count. Writes the reference boxes and each reference's triangle, at the triangle's scanned
-// offset. CPU twin: `split_triangle`.
+// Pieces are split recursively at the coarsest Morton-grid plane crossing the piece
+// (triangle_pieces.wgsl: planes on the power-of-two subdivision of the scene's cubic grid, so
+// neighbouring triangles' splits agree). A piece carries the grid cells it covers as integers: the
+// side cut at a plane ends exactly at that plane's cell, whatever the rounding of the plane's
+// position and of the grid scale (a float cell range would put a side that ends on the plane into
+// the next cell on some devices, and the piece would then be "split" at its own side again,
+// emitting copies of one box). Each side is the box of the triangle's part on that side of the
+// plane (its vertices there and its edges' crossings of the plane) intersected with the piece
+// box's side, as the paper and SBVH's reference splits do. Clipping the triangle to each side box
+// instead (a polygon in a private array) made the kernel 3-4x slower on lavapipe for boxes that
+// are tighter only where the triangle reaches beyond the piece (SAH within 0.8 %; README,
+// "Pre-splitting against SBVH"). The remaining pieces are shared by the sides' extents in cells
+// (integer arithmetic, rounded half up). A piece that cannot be split (inside one grid cell, or a
+// side left empty) is emitted as often as it still owes references, so every triangle writes
+// exactly its count.
+// One invocation per triangle writes its references' triangles, and the boxes of a triangle of
+// up to SPLIT_INLINE_PIECES references (its pieces one after another). A triangle of more
+// references (up to MAX_SPLITS + 1) lists them in `heavy_refs` instead, and
+// references_split.wgsl finds each one's box with an invocation of its own: one invocation
+// splitting 32 pieces in turn would hold up its whole SIMD group for 63 cuts. Writes the
+// reference boxes and each reference's triangle at the triangle's scanned offset. CPU twin:
+// `split_triangle`.
 #include "bvh_node.wgsl"
 #include "aabb.wgsl"
 #include "items.wgsl"
@@ -29,192 +35,44 @@
 @group(0) @binding(4) var<storage, read> ref_total: array<u32>;
 @group(0) @binding(5) var<storage, read_write> prim_boxes: array<Aabb>;
 @group(0) @binding(6) var<storage, read_write> ref_tris: array<u32>;
-
 // The scene box as box words (box_words.wgsl).
 @group(0) @binding(7) var<storage, read> scene_bounds: array<vec4<u32>>;
-
-// The first reference of triangle i.
-fn first_reference(i: u32) -> u32 {
-    return ref_offsets[i] + block_offsets[i / SCAN_BLOCK];
-}
+// The budget search's state; [SPLIT_HEAVY_WORD]: the entries of `heavy_refs` so far (zeroed
+// before the stage).
+@group(0) @binding(8) var<storage, read_write> budget_state: array<atomic<u32>>;
+// The references of triangles of more than SPLIT_INLINE_PIECES references.
+@group(0) @binding(9) var<storage, read_write> heavy_refs: array<u32>;
 
 #include "split_grid.wgsl"
+#include "triangle_pieces.wgsl"
 
-struct Piece {
-    lo: vec3<f32>,
-    hi: vec3<f32>,
-    first: vec3<u32>,
-    last: vec3<u32>,
-    // References the piece owes, and where the first goes.
-    pieces: u32,
-    out: u32,
-}
-
-// The piece of box [lo, hi] within the cells [first, last] of its parent.
-fn piece_within(grid: SplitGrid, lo: vec3<f32>, hi: vec3<f32>, first: vec3<u32>, last: vec3<u32>, pieces: u32) -> Piece {
-    let cells = cell_range(grid, lo, hi);
-    let f = clamp(cells.first, first, last);
-    let l = clamp(cells.last, f, last);
-    return Piece(lo, hi, f, l, pieces, 0u);
-}
-
-// Extent in cells along the piece's longest axis.
-fn piece_cells(p: Piece) -> u32 {
-    let e = p.last - p.first + vec3<u32>(1u);
-    return max(e.x, max(e.y, e.z));
-}
-
-struct Clipped {
-    lo: vec3<f32>,
-    hi: vec3<f32>,
-    empty: bool,
-}
-
-// The two sides of a piece cut at a plane: each side's part of the triangle, boxed so far.
-struct Sides {
-    below_lo: vec3<f32>,
-    below_hi: vec3<f32>,
-    above_lo: vec3<f32>,
-    above_hi: vec3<f32>,
-}
-
-// Adds edge a -> b of the triangle to the sides of the plane at `position` on `axis`: a to the
-// side(s) it lies on (both when on the plane), and the edge's crossing of the plane to both when
-// a and b lie strictly on opposite sides.
-fn add_edge(sides: ptr<function, Sides>, a: vec3<f32>, b: vec3<f32>, axis: u32, position: f32) {
-    let ax = a[axis];
-    let bx = b[axis];
-    if ax <= position {
-        (*sides).below_lo = min((*sides).below_lo, a);
-        (*sides).below_hi = max((*sides).below_hi, a);
-    }
-    if ax >= position {
-        (*sides).above_lo = min((*sides).above_lo, a);
-        (*sides).above_hi = max((*sides).above_hi, a);
-    }
-    if (ax < position && bx > position) || (ax > position && bx < position) {
-        let s = (position - ax) / (bx - ax);
-        var p = a + vec3<f32>(s * (b.x - a.x), s * (b.y - a.y), s * (b.z - a.z));
-        p[axis] = position;
-        (*sides).below_lo = min((*sides).below_lo, p);
-        (*sides).below_hi = max((*sides).below_hi, p);
-        (*sides).above_lo = min((*sides).above_lo, p);
-        (*sides).above_hi = max((*sides).above_hi, p);
-    }
-}
-
-// The part of the triangle boxed by [lo, hi] within the side box [side_lo, side_hi]: their
-// intersection, empty when they do not meet.
-fn within_side(lo: vec3<f32>, hi: vec3<f32>, side_lo: vec3<f32>, side_hi: vec3<f32>) -> Clipped {
-    let empty = any(lo > side_hi) || any(hi < side_lo);
-    return Clipped(clamp(lo, side_lo, side_hi), clamp(hi, side_lo, side_hi), empty);
-}
-
-const NO_AXIS: u32 = 3u;
-
-struct SplitPlane {
-    // NO_AXIS when no grid plane crosses the piece.
-    axis: u32,
-    // Cells below `cell` lie left of the plane.
-    cell: u32,
-    position: f32,
-}
-
-// The split plane of a piece, skipping the axes in `tried` (a bit mask): on each axis, the grid
-// plane of the highest bit in which the first and last covered cells differ (the coarsest
-// Morton-grid plane crossing the piece on that axis); of the planes inside the piece box by more
-// than a cell on both sides, the one of the highest level, ties in Morton bit order (x, y, z). A
-// side thinner than a cell is not worth a reference, and the margin keeps the choice from turning
-// on rounding: the grid's 2^21 cells per axis are near the precision of the coordinates, so a
-// piece that ends on a plane (mathematically) may end a fraction of a cell beyond it.
-fn split_plane(grid: SplitGrid, p: Piece, tried: u32) -> SplitPlane {
-    var best = SplitPlane(NO_AXIS, 0u, 0.0);
-    var best_level = 0u;
-    for (var axis = 0u; axis < 3u; axis++) {
-        let differing = p.first[axis] ^ p.last[axis];
-        if differing == 0u || (tried & (1u << axis)) != 0u {
-            continue;
-        }
-        let level = 31u - countLeadingZeros(differing);
-        let cell = (p.last[axis] >> level) << level;
-        let position = grid.scene_min[axis] + f32(cell) * grid.cell;
-        let inside = p.lo[axis] < position - grid.cell && position + grid.cell < p.hi[axis];
-        if inside && (best.axis == NO_AXIS || level > best_level) {
-            best = SplitPlane(axis, cell, position);
-            best_level = level;
-        }
-    }
-    return best;
-}
-
-// Splits triangle i (box [lo, hi], covering `cells`) into the references first_out .. end - 1.
-// The pieces form a binary tree whose leaves are written left to right: a piece's references
-// start at `out`, its left side's first. The loop goes on with the side of fewer references and
-// stacks the other, so at most PIECE_STACK = log2(MAX_SPLITS + 1) pieces wait: with d pieces
-// waiting, the current one owes at most 1/2^d of the triangle's references (the side taken owes
-// at most half of its parent's, a waiting one less than its parent).
-// A function of its own, called only for a triangle of several references, so that the others
-// do not pay for its piece stack (zero-initialized, as every WGSL `var`).
-fn split_triangle(grid: SplitGrid, i: u32, t: Triangle, lo: vec3<f32>, hi: vec3<f32>, cells: CellRange, first_out: u32, end: u32) {
+// Splits triangle t (box [lo, hi]) into its references first_out .. end - 1 (at most
+// SPLIT_INLINE_PIECES). The loop goes on with the side of fewer references and stacks the other,
+// so at most PIECE_STACK = log2(SPLIT_INLINE_PIECES) pieces wait: with d pieces waiting, the
+// current one owes at most 1/2^d of the triangle's references (the side taken owes at most half
+// of its parent's, a waiting one less than its parent). A function of its own, called only for a
+// triangle of several references, so that the others do not pay for its piece stack
+// (zero-initialized, as every WGSL `var`).
+fn split_triangle(grid: SplitGrid, t: Triangle, lo: vec3<f32>, hi: vec3<f32>, first_out: u32, end: u32) {
     var stack: array<Piece, PIECE_STACK>;
+    let cells = cell_range(grid, lo, hi);
     var piece = piece_within(grid, lo, hi, cells.first, cells.last, end - first_out);
     piece.out = first_out;
     var sp = 0u;
     loop {
-        // A plane whose cut leaves one side empty (the piece only grazes it, by rounding) gives
-        // way to the next candidate.
-        var split = false;
-        var tried = select(7u, 0u, piece.pieces > 1u);
-        var plane = SplitPlane(NO_AXIS, 0u, 0.0);
-        var left = Clipped(piece.lo, piece.hi, false);
-        var right = left;
-        while !split {
-            plane = split_plane(grid, piece, tried);
-            if plane.axis == NO_AXIS {
-                break;
-            }
-            tried |= 1u << plane.axis;
-            var left_hi = piece.hi;
-            left_hi[plane.axis] = plane.position;
-            var right_lo = piece.lo;
-            right_lo[plane.axis] = plane.position;
-            // The triangle cut at the plane, each side intersected with its half of the piece.
-            var sides = Sides(vec3<f32>(F32_MAX), vec3<f32>(-F32_MAX), vec3<f32>(F32_MAX), vec3<f32>(-F32_MAX));
-            add_edge(&sides, t.v0, t.v1, plane.axis, plane.position);
-            add_edge(&sides, t.v1, t.v2, plane.axis, plane.position);
-            add_edge(&sides, t.v2, t.v0, plane.axis, plane.position);
-            left = within_side(sides.below_lo, sides.below_hi, piece.lo, left_hi);
-            right = within_side(sides.above_lo, sides.above_hi, right_lo, piece.hi);
-            split = !left.empty && !right.empty;
-        }
-        if split {
-            var below = piece.last;
-            below[plane.axis] = plane.cell - 1u;
-            var above = piece.first;
-            above[plane.axis] = plane.cell;
-            var l = piece_within(grid, left.lo, left.hi, piece.first, below, 0u);
-            var r = piece_within(grid, right.lo, right.hi, above, piece.last, 0u);
-            // Shared by extent in cells, rounded half up.
-            let n = piece.pieces;
-            let wl = piece_cells(l);
-            let wr = piece_cells(r);
-            let nl = clamp((2u * n * wl + wl + wr) / (2u * (wl + wr)), 1u, n - 1u);
-            l.pieces = nl;
-            l.out = piece.out;
-            r.pieces = n - nl;
-            r.out = piece.out + nl;
-            if nl <= n - nl {
-                stack[sp] = r;
-                piece = l;
+        let cut = cut_piece(grid, t, piece);
+        if cut.split {
+            if cut.left.pieces <= cut.right.pieces {
+                stack[sp] = cut.right;
+                piece = cut.left;
             } else {
-                stack[sp] = l;
-                piece = r;
+                stack[sp] = cut.left;
+                piece = cut.right;
             }
             sp++;
         } else {
             for (var k = 0u; k < piece.pieces; k++) {
                 prim_boxes[piece.out + k] = Aabb(piece.lo, 0u, piece.hi, 0u);
-                ref_tris[piece.out + k] = i;
             }
             if sp == 0u {
                 break;
@@ -233,18 +91,21 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let t = triangles[i];
     let out = first_reference(i);
-    var end = ref_total[0];
-    if i + 1u < params.count {
-        end = first_reference(i + 1u);
-    }
+    let end = reference_end(i, params.count);
     let lo = min(t.v0, min(t.v1, t.v2));
     let hi = max(t.v0, max(t.v1, t.v2));
+    for (var j = out; j < end; j++) {
+        ref_tris[j] = i;
+    }
     if end - out == 1u {
         // Unsplit: the triangle's box (what the piece loop emits for a single piece).
         prim_boxes[out] = Aabb(lo, 0u, hi, 0u);
-        ref_tris[out] = i;
-        return;
+    } else if end - out <= SPLIT_INLINE_PIECES {
+        split_triangle(split_grid(), t, lo, hi, out, end);
+    } else {
+        let slot = atomicAdd(&budget_state[SPLIT_HEAVY_WORD], end - out);
+        for (var j = out; j < end; j++) {
+            heavy_refs[slot + j - out] = j;
+        }
     }
-    let grid = split_grid();
-    split_triangle(grid, i, t, lo, hi, cell_range(grid, lo, hi), out, end);
 }

@@ -24,6 +24,7 @@ pub const ALL: &[&KernelInfo] = &[
     &bvh::presplit::SPLITS_COUNT.info,
     &bvh::presplit::SPLITS_ASSIGN.info,
     &bvh::presplit::TRIANGLES_SPLIT.info,
+    &bvh::presplit::REFERENCES_SPLIT.info,
     &bvh::NODES_REFIT.info,
     &trace::PATHS_TRACE.info,
     &trace::IMAGE_TONEMAP.info,

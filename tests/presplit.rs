@@ -19,7 +19,7 @@ use treelet::bvh::treelet::{
 use treelet::bvh::{sah_cost, validate_with_references, SahParams};
 use treelet::device::{Geometry, Tree};
 use treelet::geometry::Aabb;
-use treelet::gpu::constants::MAX_SPLITS;
+use treelet::gpu::constants::{MAX_SPLITS, SPLIT_INLINE_PIECES};
 use treelet::scene::{load_scene, Triangle};
 use treelet::trace::closest_hits;
 
@@ -265,6 +265,10 @@ fn a_device_rounding_divisions_differently_passes_the_agreement_check() {
 fn gpu_split_agrees_with_cpu_twin() {
     let mut splitter = PreSplitter::new(gpu());
     let mut most_pieces = 0;
+    // Triangles split by each kernel path (pieces in 2..=SPLIT_INLINE_PIECES: one invocation per
+    // triangle; more: one per reference), and of those how many disagree with the twin.
+    let (mut inline, mut inline_disagreeing) = (0usize, 0usize);
+    let (mut heavy, mut heavy_disagreeing) = (0usize, 0usize);
     for (tris, percent) in [
         (slivers(), 30),
         (load_scene("field-10k").unwrap().triangles, 50),
@@ -307,6 +311,12 @@ fn gpu_split_agrees_with_cpu_twin() {
         let bounds = tris.iter().fold(Aabb::EMPTY, |b, t| b.union(t.bounds()));
         let grid = SplitGrid::new(&bounds);
         let disagreeing = disagreeing_triangles(&tris, q, &boxes, &stages.ref_tris, &grid);
+        let is_heavy = |t: usize| pieces[t] > SPLIT_INLINE_PIECES;
+        let is_inline = |t: usize| (2..=SPLIT_INLINE_PIECES).contains(&pieces[t]);
+        heavy += (0..tris.len()).filter(|&t| is_heavy(t)).count();
+        inline += (0..tris.len()).filter(|&t| is_inline(t)).count();
+        heavy_disagreeing += disagreeing.iter().filter(|&&t| is_heavy(t)).count();
+        inline_disagreeing += disagreeing.iter().filter(|&&t| is_inline(t)).count();
         let agreeing = 1.0 - disagreeing.len() as f64 / tris.len() as f64;
         println!(
             "{} triangles at {percent}%: {} disagree with the CPU twin",
@@ -327,6 +337,19 @@ fn gpu_split_agrees_with_cpu_twin() {
         MAX_SPLITS + 1,
         "no triangle got the most pieces"
     );
+    // Both kernel paths split triangles, and each agrees with the twin on its own (a path that
+    // is wrong for all its triangles fails here even where it splits few of all triangles).
+    println!("split by triangle: {inline} ({inline_disagreeing} disagree); by reference: {heavy} ({heavy_disagreeing} disagree)");
+    for (path, count, disagreeing) in [
+        ("per triangle", inline, inline_disagreeing),
+        ("per reference", heavy, heavy_disagreeing),
+    ] {
+        assert!(count >= 50, "only {count} triangles split {path}");
+        assert!(
+            disagreeing as f64 <= (1.0 - MIN_AGREEING) * count as f64,
+            "split {path}: {disagreeing} of {count} triangles disagree with the CPU twin"
+        );
+    }
 }
 
 #[test]

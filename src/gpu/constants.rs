@@ -15,10 +15,14 @@ pub const MORTON_GRID: u32 = 1 << 21;
 pub const MORTON_AXIS_BITS: u32 = 16;
 /// Splits per triangle at most in pre-splitting (pieces ≤ `MAX_SPLITS + 1`).
 pub const MAX_SPLITS: u32 = 31;
-/// Pieces waiting at most while one triangle is split (`split_triangle` in
+/// References of a triangle that `triangles_split.wgsl` splits in its own invocation, piece after
+/// piece; the references of a triangle of more are split one per invocation
+/// (`references_split.wgsl`).
+pub const SPLIT_INLINE_PIECES: u32 = 8;
+/// Pieces waiting at most while one invocation splits a triangle (`split_triangle` in
 /// `triangles_split.wgsl`: the loop goes on with the side of fewer references, so a waiting piece
-/// owes at least as many as everything below it): ⌊log2(MAX_SPLITS + 1)⌋.
-pub const PIECE_STACK: u32 = (MAX_SPLITS + 1).ilog2();
+/// owes at least as many as everything below it): ⌊log2(SPLIT_INLINE_PIECES)⌋.
+pub const PIECE_STACK: u32 = SPLIT_INLINE_PIECES.ilog2();
 /// Candidate scales the pre-splitting budget search evaluates per step (`splits_search.wgsl`):
 /// 255 split the interval in 256, so `SPLIT_SEARCH_STEPS` steps narrow 2^32 bit patterns to one.
 pub const SPLIT_SEARCH_CANDIDATES: u32 = 255;
@@ -39,6 +43,9 @@ pub const SPLIT_COUNT_ITEMS: u32 = 4;
 /// (`splits_search.wgsl`).
 pub const SPLIT_SCALE_WORD: u32 =
     1 + 3 * SPLIT_SEARCH_STEPS + SPLIT_SEARCH_STEPS * SPLIT_SEARCH_CANDIDATES;
+/// Word of the budget search's state after the scale: the references `triangles_split.wgsl`
+/// listed for `references_split.wgsl`.
+pub const SPLIT_HEAVY_WORD: u32 = SPLIT_SCALE_WORD + 1;
 /// Largest treelet (leaves): each treelet invocation keeps the costs of its 2^8 subsets and
 /// the boxes of two halves of 4 leaves (`treelet_dp.wgsl`).
 pub const MAX_TREELET_SIZE: u32 = 8;
@@ -74,11 +81,13 @@ pub fn wgsl() -> String {
         f32_const("MORTON_GRID_MAX", (MORTON_GRID - 1) as f32),
         u32_const("MORTON_AXIS_BITS", MORTON_AXIS_BITS),
         u32_const("MAX_SPLITS", MAX_SPLITS),
+        u32_const("SPLIT_INLINE_PIECES", SPLIT_INLINE_PIECES),
         u32_const("PIECE_STACK", PIECE_STACK),
         u32_const("SPLIT_SEARCH_CANDIDATES", SPLIT_SEARCH_CANDIDATES),
         u32_const("SPLIT_COUNT_ITEMS", SPLIT_COUNT_ITEMS),
         u32_const("SPLIT_SEARCH_STEPS", SPLIT_SEARCH_STEPS),
         u32_const("SPLIT_SCALE_WORD", SPLIT_SCALE_WORD),
+        u32_const("SPLIT_HEAVY_WORD", SPLIT_HEAVY_WORD),
         u32_const("MAX_TREELET", MAX_TREELET_SIZE),
         u32_const("MAX_GPU_LEAF_SIZE", MAX_GPU_LEAF_SIZE),
         u32_const("COLLAPSE_COST_WORDS", COLLAPSE_COST_WORDS),

@@ -108,6 +108,10 @@ const INCLUDES: &[(&str, &str)] = &[
         "treelet_team.wgsl",
         include_str!("../../shaders/include/treelet_team.wgsl"),
     ),
+    (
+        "triangle_pieces.wgsl",
+        include_str!("../../shaders/include/triangle_pieces.wgsl"),
+    ),
 ];
 
 /// The text of a generated include for a pipeline's override values.

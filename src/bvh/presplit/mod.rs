@@ -3,11 +3,14 @@
 //! budget of β·N extra references. Stages: triangle boxes → scene box (reduction) → split
 //! priorities (`triangles_priority.wgsl`) → split counts under the budget by a 256-ary search
 //! (`splits_count.wgsl` per step, then `splits_assign.wgsl`) → reference offsets (exclusive
-//! scan) → recursive splitting at Morton-grid planes (`triangles_split.wgsl`). The reference
+//! scan) → recursive splitting at Morton-grid planes (`triangles_split.wgsl`: a triangle per
+//! invocation; `references_split.wgsl`: a reference per invocation for the triangles of more than
+//! `SPLIT_INLINE_PIECES` references). The reference
 //! count stays on the GPU: the LBVH stages after it are sized for N + β·N references and read the
 //! count (`gpu::ItemCount`). CPU twin: `presplit_cpu`.
 
 mod cpu;
+mod references_split;
 mod splits_assign;
 mod splits_count;
 mod triangles_priority;
@@ -17,6 +20,7 @@ pub use cpu::{
     budget_scale, presplit_cpu, split_importance, split_priority, split_triangle, splits_at,
     SplitGrid,
 };
+pub use references_split::REFERENCES_SPLIT;
 pub use splits_assign::SPLITS_ASSIGN;
 pub use splits_count::SPLITS_COUNT;
 pub use triangles_priority::TRIANGLES_PRIORITY;
@@ -27,7 +31,9 @@ use splits_count::BudgetParams;
 use super::lbvh::{CentroidsReduce, TriangleBoundsOutput, TrianglesBounds};
 use crate::device::Geometry;
 use crate::geometry::GpuAabb;
-use crate::gpu::constants::{SPLIT_COUNT_ITEMS, SPLIT_SCALE_WORD, SPLIT_SEARCH_STEPS};
+use crate::gpu::constants::{
+    SPLIT_COUNT_ITEMS, SPLIT_HEAVY_WORD, SPLIT_INLINE_PIECES, SPLIT_SCALE_WORD, SPLIT_SEARCH_STEPS,
+};
 use crate::gpu::{
     read_buffer, storage_buffer_zeroed, GpuContext, Items, Kernel, ParamSlab, Recorder,
 };
@@ -58,6 +64,10 @@ struct Scratch {
     priorities: wgpu::Buffer,
     budget_state: wgpu::Buffer,
     ref_offsets: wgpu::Buffer,
+    /// The references of triangles of more than `SPLIT_INLINE_PIECES` references (for
+    /// `heavy_capacity(budget)` of them; `heavy_budget` the budget it was sized for).
+    heavy_refs: wgpu::Buffer,
+    heavy_budget: u32,
 }
 
 /// Kernels and scratch of the pre-splitting stage, reused per frame.
@@ -67,6 +77,7 @@ pub struct PreSplitter {
     count_splits: Kernel<BudgetParams>,
     assign_splits: Kernel<BudgetParams>,
     split: Kernel<Items>,
+    split_references: Kernel<Items>,
     scan: PrefixScan,
     scratch: Option<Scratch>,
     ref_tris: Option<wgpu::Buffer>,
@@ -80,6 +91,7 @@ impl PreSplitter {
             count_splits: Kernel::new(ctx, &SPLITS_COUNT),
             assign_splits: Kernel::new(ctx, &SPLITS_ASSIGN),
             split: Kernel::new(ctx, &TRIANGLES_SPLIT),
+            split_references: Kernel::new(ctx, &REFERENCES_SPLIT),
             scan: PrefixScan::new(ctx),
             scratch: None,
             ref_tris: None,
@@ -89,6 +101,13 @@ impl PreSplitter {
     /// References there can be for `triangles` triangles with `budget` extra ones.
     pub fn capacity(triangles: u32, budget: u32) -> u32 {
         triangles.saturating_add(budget)
+    }
+
+    /// References there can be of triangles of more than `SPLIT_INLINE_PIECES` references with
+    /// `budget` extra ones: such a triangle's R references are at most (1 + 1/I)·(R − 1) for I =
+    /// SPLIT_INLINE_PIECES, and the R − 1 of all triangles add up to at most the budget.
+    pub fn heavy_capacity(budget: u32) -> u32 {
+        budget.saturating_add(budget / SPLIT_INLINE_PIECES)
     }
 
     /// Records the whole stage for `geometry`'s triangles with `budget` extra references (passes
@@ -105,7 +124,12 @@ impl PreSplitter {
         let ctx = rec.ctx;
         let n = geometry.triangle_count;
         let capacity = Self::capacity(n, budget);
-        if self.scratch.as_ref().is_none_or(|s| s.capacity < n) {
+        let heavy_capacity = Self::heavy_capacity(budget);
+        if self
+            .scratch
+            .as_ref()
+            .is_none_or(|s| s.capacity < n || s.heavy_budget < budget)
+        {
             self.scratch = None;
             self.scratch = Some(Scratch {
                 capacity: n,
@@ -115,9 +139,15 @@ impl PreSplitter {
                 budget_state: storage_buffer_zeroed(
                     ctx,
                     "split budget state",
-                    u64::from(SPLIT_SCALE_WORD + 1) * 4,
+                    u64::from(SPLIT_HEAVY_WORD + 1) * 4,
                 )?,
                 ref_offsets: storage_buffer_zeroed(ctx, "reference offsets", u64::from(n) * 4)?,
+                heavy_refs: storage_buffer_zeroed(
+                    ctx,
+                    "references split one per invocation",
+                    u64::from(heavy_capacity.max(1)) * 4,
+                )?,
+                heavy_budget: budget,
             });
         }
         if self
@@ -182,18 +212,25 @@ impl PreSplitter {
                 .record_block_local(&mut pass, &s.ref_offsets, n, 1)?;
         }
         let mut pass = rec.pass("split");
-        pass.dispatch_items(
-            &self.split,
-            n,
-            &[
-                &geometry.triangles,
-                &s.ref_offsets,
-                self.scan.block_offsets(),
-                self.scan.total(),
-                prim_boxes,
-                ref_tris,
-                scene_box,
-            ],
+        let split_buffers = [
+            &geometry.triangles,
+            &s.ref_offsets,
+            self.scan.block_offsets(),
+            self.scan.total(),
+            prim_boxes,
+            ref_tris,
+            scene_box,
+            &s.budget_state,
+            &s.heavy_refs,
+        ];
+        pass.dispatch_items(&self.split, n, &split_buffers);
+        // Over the most entries there can be; those past the count written return.
+        let heavy_grid = self.split_references.grid(ctx, heavy_capacity);
+        pass.dispatch(
+            &self.split_references,
+            heavy_grid,
+            &Items::new(n, heavy_grid),
+            &split_buffers,
         );
         Ok(())
     }
