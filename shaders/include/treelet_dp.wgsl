@@ -46,6 +46,8 @@ var<private> leaf_node: array<u32, MAX_TREELET>;
 var<private> leaf_min: array<vec3<f32>, MAX_TREELET>;
 var<private> leaf_max: array<vec3<f32>, MAX_TREELET>;
 var<private> leaf_prims: array<u32, MAX_TREELET>;
+// The leaves' subtree costs (final: their subtrees were finished before the treelet).
+var<private> leaf_cost: array<f32, MAX_TREELET>;
 // During the formation: each leaf's children (left, right) and area, -1 for a tree leaf (never
 // expanded).
 var<private> leaf_children: array<vec2<u32>, MAX_TREELET>;
@@ -166,7 +168,9 @@ fn form_treelet(root: u32) -> f32 {
     }
     for (var i = 0u; i < MAX_TREELET; i++) {
         if i < TREELET_SIZE {
+            // Both loads at once: the DP does not wait for the costs on its own.
             leaf_prims[i] = prim_counts[leaf_node[i]];
+            leaf_cost[i] = costs[leaf_node[i]];
         } else {
             leaf_min[i] = vec3<f32>(F32_MAX);
             leaf_max[i] = vec3<f32>(-F32_MAX);

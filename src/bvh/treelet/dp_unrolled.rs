@@ -24,6 +24,8 @@
 //! partition and its children's cost, as `best_partition` does. The order of operations is the
 //! CPU twin's (`solve_treelet`): subsets in increasing order, partitions in the order of
 //! `partitions`, the first of equal costs kept; `min` finds the same value as its strict compare.
+//! The leaves' costs come from `leaf_cost`, loaded with their primitive counts at the end of the
+//! formation.
 
 use std::fmt::Write;
 
@@ -85,7 +87,7 @@ fn subset_costs() -> vec2<u32> {
     let full = (1u << TREELET_SIZE) - 1u;
     for (var s = 1u; s < full; s++) {
         if countOneBits(s) == 1u {
-            dp_cost[s - 1u] = costs[leaf_node[firstTrailingBit(s)]];
+            dp_cost[s - 1u] = leaf_cost[firstTrailingBit(s)];
         } else {
             dp_cost[s - 1u] = internal_subset_cost(s, bitcast<f32>(best_partition(s).y));
         }
@@ -109,7 +111,7 @@ fn wgsl(m: u32) -> String {
     for s in 1..full {
         if s.count_ones() == 1 {
             let leaf = s.trailing_zeros();
-            writeln!(out, "    let c{s} = costs[leaf_node[{leaf}]];").unwrap();
+            writeln!(out, "    let c{s} = leaf_cost[{leaf}];").unwrap();
         } else {
             let mut parts = partitions(s);
             let first = parts
