@@ -77,9 +77,9 @@ impl GpuContext {
     ) -> Result<Self> {
         let adapter = pollster::block_on(Self::select_adapter(&instance, options, surface))?;
         let info = adapter.get_info();
-        let wanted = wgpu::Features::TIMESTAMP_QUERY
-            | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS
-            | wgpu::Features::SUBGROUP;
+        // Timestamps for the stage and dispatch timings; no kernel uses another optional feature.
+        let wanted =
+            wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
         let features = adapter.features() & wanted;
         let required_limits = adapter.limits();
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
