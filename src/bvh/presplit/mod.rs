@@ -5,9 +5,9 @@
 //! (`splits_count.wgsl` per step, then `splits_assign.wgsl`) → reference offsets (exclusive
 //! scan) → recursive splitting at Morton-grid planes (`triangles_split.wgsl`: a triangle per
 //! invocation; `references_split.wgsl`: a reference per invocation for the triangles of more than
-//! `SPLIT_INLINE_PIECES` references). The reference
-//! count stays on the GPU: the LBVH stages after it are sized for N + β·N references and read the
-//! count (`gpu::ItemCount`). CPU twin: `presplit_cpu`.
+//! `SPLIT_INLINE_PIECES` references). The reference count stays on the GPU: the LBVH stages after
+//! it are sized for N + β·N references and read the count (`gpu::ItemCount`). CPU twin:
+//! `presplit_cpu`.
 
 mod cpu;
 mod references_split;
