@@ -9,13 +9,13 @@
 #   nowrite  formation and DP, no write-back;
 #   nodp     formation only (the DP replaced by a constant);
 #   noform   the root's cost and the treelet's first two leaves only.
-# nowrite - nodp is the DP's latency per level, nodp - noform the formation's expansions, noform
-# minus an empty dispatch what every treelet dispatch costs besides (launch, first loads, next
-# levels). The variants differ from the real kernel by conditions on `params.zero` (always 0, a
+# nowrite - nodp is the DP's latency per level (nowrite is also run with teams of 32 for every
+# treelet and with the DP's loop form), nodp - noform the formation's expansions, noform minus an
+# empty dispatch what every treelet dispatch costs besides (launch, first loads, next levels). The variants differ from the real kernel by conditions on `params.zero` (always 0, a
 # uniform the compiler cannot fold), so the rest of each kernel is compiled as it is.
 #   Here, after `bash ../shared/gpu/pack.sh`:   bash scripts/gpu-probe.sh build
 #     (three incremental release builds; each variant's binary goes to .gpu/probe-NAME.xz, and
-#     shaders/include/treelet_dp.wgsl is restored after each, also on failure)
+#     the treelet includes are restored after each, also on failure)
 #   On the GPU (`run` with carry [".gpu", ".gl"]):   bash scripts/gpu-probe.sh run
 #     (or as the "probe" step of scripts/gpu-all.sh, which runs it when the binaries are there)
 #   A dry run of `run` on lavapipe, after `build`: TREELET=target/release/treelet SCENES=field:50 \
@@ -23,11 +23,12 @@
 # Output: $OUT/probe.jsonl and a table of every variant's level times, round by round.
 set -eu
 dp=shaders/include/treelet_dp.wgsl
+team=shaders/include/treelet_team.wgsl
 case "${1:-}" in
 build)
   [ -f "$HOME/.cargo/env" ] && . "$HOME/.cargo/env"
   mkdir -p .gpu
-  trap 'git checkout -- $dp' EXIT
+  trap 'git checkout -- $dp $team' EXIT
   nowrite='s/    if full_cost < current {/    if full_cost < current \&\& params.zero != 0u {/'
   nodp='s/    let best = subset_costs();/    var best = vec2<u32>(1u, 0u); if params.zero != 0u { best = subset_costs(); }/'
   noform='s/    for (var count = 2u; count < TREELET_SIZE; count++) {/    for (var count = 2u; count < TREELET_SIZE \&\& params.zero != 0u; count++) {/'
@@ -37,17 +38,19 @@ build)
       nodp) edits=("$nowrite" "$nodp") ;;
       noform) edits=("$nowrite" "$nodp" "$noform") ;;
     esac
-    git checkout -- $dp
+    git checkout -- $dp $team
     for edit in "${edits[@]}"; do sed -i "$edit" $dp; done
+    # The teams' write-back too (treelet_team.wgsl), so that teams keep the LBVH as well.
+    sed -i "$nowrite" $team
     # Each substitution must have matched (one line each).
-    [ "$(git diff --numstat -- $dp | cut -f1)" = "${#edits[@]}" ] \
-      || { echo "probe $variant: a substitution did not match $dp"; exit 1; }
+    [ "$(git diff --numstat -- $dp | cut -f1) $(git diff --numstat -- $team | cut -f1)" = "${#edits[@]} 1" ] \
+      || { echo "probe $variant: a substitution did not match $dp or $team"; exit 1; }
     cargo build --release --quiet
     strip -o /tmp/treelet-probe target/release/treelet
     xz -T2 -6 -c /tmp/treelet-probe > .gpu/probe-$variant.xz
     echo "probe $variant: .gpu/probe-$variant.xz"
   done
-  git checkout -- $dp
+  git checkout -- $dp $team
   cargo build --release --quiet
   ;;
 run)
@@ -61,14 +64,19 @@ run)
   done
   : > "$out/probe.jsonl"
   for s in ${SCENES:-conference sibenik}; do
-    for variant in real nowrite nodp noform; do
+    # nowrite also with the DP's other forms: teams of 32 for every treelet, and the loop form.
+    for row in real nowrite nowrite:--team-below=1000000000 nowrite:--treelet-dp=loop nodp noform; do
+      variant=${row%%:*}
+      opts=""
+      [ "$row" != "$variant" ] && opts=${row#*:}
       exe=$probes/$variant
       [ $variant = real ] && exe=$bin
       [ -x "$exe" ] || continue
+      # shellcheck disable=SC2086
       timeout 100 "$exe" bench --scene "$s" --builder trbvh --level-dispatches 32 --profile-dispatches \
-        --width 64 --height 64 --spp 1 --repeats "${REPEATS:-5}" 2>> "$out/probe.log" \
-        | sed "s/^{/{\"probe\":\"$variant\",/" >> "$out/probe.jsonl" \
-        || echo "$s $variant: exit $? (see probe.log)"
+        --width 64 --height 64 --spp 1 --repeats "${REPEATS:-5}" ${opts/=/ } 2>> "$out/probe.log" \
+        | sed "s/^{/{\"probe\":\"$variant${opts:+ $opts}\",/" >> "$out/probe.jsonl" \
+        || echo "$s $row: exit $? (see probe.log)"
     done
   done
   python3 - "$out/probe.jsonl" <<'PY'
@@ -79,9 +87,9 @@ for scene in dict.fromkeys(r["scene"] for r in rows):
     for r in (r for r in rows if r["scene"] == scene):
         d = [x for x in r["dispatch_ms"] if x["stage"].startswith("treelets")]
         small = [x["ms"] or 0 for x in d if x["kernel"] == "treelets_optimize" and (x["ms"] or 0) < 0.08]
-        print(f"  {r['probe']:8} build {r['build_ms']:7.3f}  levels under 0.08 ms: {len(small)}, median "
+        print(f"  {r['probe']:35} build {r['build_ms']:7.3f}  levels under 0.08 ms: {len(small)}, median "
               f"{statistics.median(small) if small else 0:.4f}  sah {r['sah']:.4f}")
-        print("           " + " ".join(("|" if x["kernel"] == "nodes_level" else "") + f"{x['ms'] or 0:.3f}" for x in d))
+        print("    " + " ".join(("|" if x["kernel"] == "nodes_level" else "") + f"{x['ms'] or 0:.3f}" for x in d))
 PY
   ;;
 *)
