@@ -274,3 +274,34 @@ impl PreSplitter {
         self.ref_tris.as_ref()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::PreSplitter;
+    use crate::gpu::constants::{MAX_SPLITS, SPLIT_INLINE_PIECES};
+
+    #[test]
+    fn heavy_capacity_holds_the_most_references_a_budget_allows() {
+        // most[b]: the most references triangles of more than SPLIT_INLINE_PIECES references can
+        // have when their extra references (R - 1 each) add up to at most b (a knapsack).
+        let budgets = 300usize;
+        let mut most = vec![0u32; budgets + 1];
+        for b in 0..=budgets {
+            for r in SPLIT_INLINE_PIECES + 1..=MAX_SPLITS + 1 {
+                let extra = (r - 1) as usize;
+                if extra <= b {
+                    most[b] = most[b].max(most[b - extra] + r);
+                }
+            }
+            assert!(
+                most[b] <= PreSplitter::heavy_capacity(b as u32),
+                "budget {b}: {} references, capacity {}",
+                most[b],
+                PreSplitter::heavy_capacity(b as u32)
+            );
+        }
+        // The bound is reached: budgets of whole triangles of SPLIT_INLINE_PIECES + 1 references.
+        let b = 10 * SPLIT_INLINE_PIECES;
+        assert_eq!(most[b as usize], PreSplitter::heavy_capacity(b));
+    }
+}
