@@ -2,17 +2,17 @@
 # Everything a lent GPU is asked to measure, in one `device` call that fits a short lease: the
 # test binaries, the round schedule sweep (levels dispatched, LEVELS; team threshold, TEAMS; the
 # DP's forms), build scaling, where a treelet level's time goes ("probe", when `bash
-# scripts/gpu-probe.sh build` packed its variants), the binary-vs-wide table, every dispatch of
-# lbvh timed per sort tile and every dispatch of trbvh and trbvh-split timed ("kernels"), in that
-# order, each step
-# capped so that the whole run ends within BUDGET seconds (default 500; STEPS picks some of the
-# steps, e.g. STEPS="tests schedules"). After every step the results so far are packed into
-# $OUT/results.tar.gz, so a call stopped at its limit still brings back what ran. A summary is
-# printed last.
-# Here, first:   bash ../shared/gpu/pack.sh   and   bash scripts/gpu-probe.sh build
-# (the probe's variants of this commit's kernels; optionally also a baseline binary: xz -c
-# OLD/treelet > .gpu/base-treelet.xz, timed beside the new one on the same GPU), then `run` with
-# carry [".gpu", ".gl"], timeout_s 600 and the command:
+# scripts/gpu-probe.sh build` packed its variants), the changes of scripts/variants/ beside this
+# commit ("variants", when `bash scripts/gpu-variants.sh build` packed them), the binary-vs-wide
+# table, every dispatch of lbvh timed per sort tile and every dispatch of trbvh and trbvh-split
+# timed ("kernels"), in that order, each step capped so that the whole run ends within BUDGET
+# seconds (default 500; STEPS picks some of the steps, e.g. STEPS="tests schedules"). After every
+# step the results so far are packed into $OUT/results.tar.gz, so a call stopped at its limit
+# still brings back what ran. A summary is printed last.
+# Here, first:   bash ../shared/gpu/pack.sh,   bash scripts/gpu-probe.sh build   and
+#   bash scripts/gpu-variants.sh build
+# (optionally also a baseline binary: xz -c OLD/treelet > .gpu/base-treelet.xz, timed beside the
+# new one on the same GPU), then `run` with carry [".gpu", ".gl"], timeout_s 600 and the command:
 #   bash scripts/gpu-all.sh
 set -u
 start=$(date +%s)
@@ -29,7 +29,7 @@ save() { tar -C $res -czf "$final/results.tar.gz" .; }
 step() {
   local name=$1 cap=$2 left
   shift 2
-  case " ${STEPS:-tests schedules scaling probe layouts profile kernels} " in
+  case " ${STEPS:-tests schedules scaling probe variants layouts profile kernels} " in
     *" $name "*) ;;
     *) return ;;
   esac
@@ -90,6 +90,9 @@ step scaling 80 bash -c scaling
 if ls .gpu/probe-*.xz > /dev/null 2>&1; then
   step probe 40 env SCENES="conference" REPEATS=5 TREELET=$TREELET bash scripts/gpu-probe.sh run
 fi
+if ls .gpu/variant-*.xz > /dev/null 2>&1; then
+  step variants 120 env TREELET=$TREELET bash scripts/gpu-variants.sh run
+fi
 step layouts 80 env SCENES="conference crytek_sponza sibenik lost_empire armadillo" OPTIMAL_SCENES="conference lost_empire" \
   REPEATS=11 bash scripts/gpu-layouts.sh
 step profile 60 env SCENES="conference field:707 field:2000" TILES="default 8 16 32" BUILDERS=lbvh \
@@ -122,7 +125,7 @@ for name in ("scaling.jsonl", "baseline.jsonl"):
               f" {b.get('min', 0):7.2f} {r['build_ms']:7.2f} {b.get('max', 0):7.2f}"
               f" {r.get('mtris_per_s') or 0:7.1f}  {st}  {r.get('sah') or 0:.4f}")
 PY
-for f in probe layouts profile kernels schedules; do
+for f in probe variants layouts profile kernels schedules; do
   echo "--- $f (tail)"
   tail -n 40 $res/$f.txt 2>/dev/null
 done

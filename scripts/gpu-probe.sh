@@ -27,6 +27,8 @@ team=shaders/include/treelet_team.wgsl
 case "${1:-}" in
 build)
   [ -f "$HOME/.cargo/env" ] && . "$HOME/.cargo/env"
+  # Restoring checks the two includes out: refuse to start with changes there to lose.
+  git diff --quiet -- $dp $team || { echo "uncommitted changes in $dp or $team: commit or stash them first"; exit 1; }
   mkdir -p .gpu
   trap 'git checkout -- $dp $team' EXIT
   nowrite='s/    if full_cost < current {/    if full_cost < current \&\& params.zero != 0u {/'

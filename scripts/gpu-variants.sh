@@ -1,0 +1,87 @@
+#!/usr/bin/env bash
+# Changes measured on lavapipe whose effect on a GPU is the open question, timed on a lent GPU
+# beside this commit's binary. Each variant is a patch in scripts/variants/ (against this
+# commit); its first lines say what it changes and what lavapipe measured ("# ..."), how to time
+# it ("# bench: OPTIONS") and on which scenes ("# scenes: S ..."). git apply skips those lines.
+#   Here, after `bash ../shared/gpu/pack.sh`:   bash scripts/gpu-variants.sh build
+#     (an incremental release build per variant, packed as .gpu/variant-NAME.xz; the working tree
+#     is restored after each, also on failure; a patch that no longer applies is reported and
+#     skipped)
+#   On the GPU (`run` with carry [".gpu", ".gl"]):   bash scripts/gpu-variants.sh run
+#     (or as the "variants" step of scripts/gpu-all.sh, which runs it when variants are packed):
+#     per variant and scene, this commit's binary and the variant's in turn, twice; JSON lines in
+#     $OUT/variants.jsonl and a table of build ms and Mrays/s (medians), main against variant.
+#   A dry run of `run` on lavapipe, after `build` (SCENES and BENCH_OPTS replace every variant's):
+#     TREELET=target/release/treelet SCENES=cornell_box BENCH_OPTS="--builder trbvh --width 16
+#     --height 16 --spp 1 --repeats 1 --warmup-ms 0" bash scripts/gpu-variants.sh run
+set -eu
+case "${1:-}" in
+build)
+  [ -f "$HOME/.cargo/env" ] && . "$HOME/.cargo/env"
+  # Restoring checks out shaders/ and src/: refuse to start with changes there to lose.
+  git diff --quiet -- shaders src || { echo "uncommitted changes in shaders/ or src/: commit or stash them first"; exit 1; }
+  mkdir -p .gpu
+  rm -f .gpu/variant-*.xz
+  restore() { git checkout -- shaders src; }
+  trap restore EXIT
+  for patch in scripts/variants/*.patch; do
+    name=$(basename "$patch" .patch)
+    if ! git apply --check "$patch" 2>/dev/null; then
+      echo "variant $name: the patch no longer applies to this commit; skipped"
+      continue
+    fi
+    git apply "$patch"
+    cargo build --release --quiet
+    strip -o /tmp/treelet-variant target/release/treelet
+    xz -T2 -6 -c /tmp/treelet-variant > ".gpu/variant-$name.xz"
+    restore
+    echo "variant $name: .gpu/variant-$name.xz"
+  done
+  cargo build --release --quiet
+  ;;
+run)
+  . scripts/gpu-env.sh
+  dir=/tmp/treelet-variants
+  mkdir -p "$dir"
+  : > "$out/variants.jsonl"
+  for f in .gpu/variant-*.xz; do
+    [ -f "$f" ] || { echo "no .gpu/variant-*.xz: run 'bash scripts/gpu-variants.sh build' first"; exit 1; }
+    name=$(basename "$f" .xz)
+    name=${name#variant-}
+    patch=scripts/variants/$name.patch
+    xz -dc "$f" > "$dir/$name" && chmod +x "$dir/$name"
+    opts=${BENCH_OPTS:-$(sed -n 's/^# bench: //p' "$patch")}
+    scenes=${SCENES:-$(sed -n 's/^# scenes: //p' "$patch")}
+    for s in $scenes; do
+      for turn in 1 2; do
+        for exe in "$bin" "$dir/$name"; do
+          tag=main
+          [ "$exe" = "$bin" ] || tag=$name
+          # shellcheck disable=SC2086
+          timeout 60 "$exe" bench --scene "$s" $opts 2>> "$out/variants.log" \
+            | sed "s/^{/{\"variant\":\"$name\",\"binary\":\"$tag\",\"turn\":$turn,/" >> "$out/variants.jsonl" \
+            || echo "$name $s $tag: exit $? (see variants.log)"
+        done
+      done
+    done
+  done
+  python3 - "$out/variants.jsonl" <<'PY'
+import json, statistics, sys
+rows = [json.loads(l) for l in open(sys.argv[1]) if l.startswith("{")]
+print("variant          scene            builder      layout  binary           build ms  Mrays/s   sah")
+keys = dict.fromkeys((r["variant"], r["scene"], r["builder"], r["layout"]) for r in rows)
+for v, s, b, l in keys:
+    for tag in ("main", v):
+        g = [r for r in rows if (r["variant"], r["scene"], r["builder"], r["layout"], r["binary"]) == (v, s, b, l, tag)]
+        if not g:
+            continue
+        build = statistics.median(r["build_ms"] for r in g)
+        rays = statistics.median(r.get("mrays_per_s") or 0 for r in g)
+        print(f"{v[:16]:16} {s[-16:]:16} {b:12} {l:7} {tag[:16]:16} {build:8.3f} {rays:8.1f}  {g[0]['sah']:.4f}")
+PY
+  ;;
+*)
+  echo "usage: bash scripts/gpu-variants.sh build|run"
+  exit 1
+  ;;
+esac
