@@ -91,7 +91,7 @@ if ls .gpu/probe-*.xz > /dev/null 2>&1; then
   step probe 40 env SCENES="conference" REPEATS=5 TREELET=$TREELET bash scripts/gpu-probe.sh run
 fi
 if ls .gpu/variant-*.xz > /dev/null 2>&1; then
-  step variants 120 env TREELET=$TREELET bash scripts/gpu-variants.sh run
+  step variants 150 env TREELET=$TREELET bash scripts/gpu-variants.sh run
 fi
 step layouts 80 env SCENES="conference crytek_sponza sibenik lost_empire armadillo" OPTIMAL_SCENES="conference lost_empire" \
   REPEATS=11 bash scripts/gpu-layouts.sh
