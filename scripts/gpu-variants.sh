@@ -9,7 +9,8 @@
 #     skipped)
 #   On the GPU (`run` with carry [".gpu", ".gl"]):   bash scripts/gpu-variants.sh run
 #     (or as the "variants" step of scripts/gpu-all.sh, which runs it when variants are packed):
-#     per variant and scene, this commit's binary and the variant's in turn, twice; JSON lines in
+#     per variant and scene, this commit's binary and the variant's in turn (TURNS times, default
+#     1: each bench already takes the median of its repeats after warm-up); JSON lines in
 #     $OUT/variants.jsonl and a table of build ms and Mrays/s (medians), main against variant.
 #   A dry run of `run` on lavapipe, after `build` (SCENES and BENCH_OPTS replace every variant's):
 #     TREELET=target/release/treelet SCENES=cornell_box BENCH_OPTS="--builder trbvh --width 16
@@ -53,7 +54,7 @@ run)
     opts=${BENCH_OPTS:-$(sed -n 's/^# bench: //p' "$patch")}
     scenes=${SCENES:-$(sed -n 's/^# scenes: //p' "$patch")}
     for s in $scenes; do
-      for turn in 1 2; do
+      for turn in $(seq "${TURNS:-1}"); do
         for exe in "$bin" "$dir/$name"; do
           tag=main
           [ "$exe" = "$bin" ] || tag=$name
