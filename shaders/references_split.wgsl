@@ -40,8 +40,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let grid = split_grid();
     let lo = min(t.v0, min(t.v1, t.v2));
     let hi = max(t.v0, max(t.v1, t.v2));
-    let cells = cell_range(grid, lo, hi);
-    var piece = piece_within(grid, lo, hi, cells.first, cells.last, reference_end(i, params.count) - out);
+    var piece = triangle_piece(grid, lo, hi, reference_end(i, params.count) - out, out);
     var k = j - out;
     loop {
         let cut = cut_piece(grid, t, piece);

@@ -55,9 +55,7 @@
 // (zero-initialized, as every WGSL `var`).
 fn split_triangle(grid: SplitGrid, t: Triangle, lo: vec3<f32>, hi: vec3<f32>, first_out: u32, end: u32) {
     var stack: array<Piece, PIECE_STACK>;
-    let cells = cell_range(grid, lo, hi);
-    var piece = piece_within(grid, lo, hi, cells.first, cells.last, end - first_out);
-    piece.out = first_out;
+    var piece = triangle_piece(grid, lo, hi, end - first_out, first_out);
     var sp = 0u;
     loop {
         let cut = cut_piece(grid, t, piece);

@@ -39,6 +39,15 @@ fn piece_within(grid: SplitGrid, lo: vec3<f32>, hi: vec3<f32>, first: vec3<u32>,
     return Piece(lo, hi, f, l, pieces, 0u);
 }
 
+// The whole triangle of box [lo, hi] as a piece that owes `pieces` references from `out`: the root
+// of its piece tree, where both kernels start.
+fn triangle_piece(grid: SplitGrid, lo: vec3<f32>, hi: vec3<f32>, pieces: u32, out: u32) -> Piece {
+    let cells = cell_range(grid, lo, hi);
+    var piece = piece_within(grid, lo, hi, cells.first, cells.last, pieces);
+    piece.out = out;
+    return piece;
+}
+
 // Extent in cells along the piece's longest axis.
 fn piece_cells(p: Piece) -> u32 {
     let e = p.last - p.first + vec3<u32>(1u);

@@ -64,10 +64,9 @@ struct Scratch {
     priorities: wgpu::Buffer,
     budget_state: wgpu::Buffer,
     ref_offsets: wgpu::Buffer,
-    /// The references of triangles of more than `SPLIT_INLINE_PIECES` references (for
-    /// `heavy_capacity(budget)` of them; `heavy_budget` the budget it was sized for).
+    /// The references of triangles of more than `SPLIT_INLINE_PIECES` references (room for
+    /// `heavy_capacity(budget)` of them).
     heavy_refs: wgpu::Buffer,
-    heavy_budget: u32,
 }
 
 /// Kernels and scratch of the pre-splitting stage, reused per frame.
@@ -125,10 +124,11 @@ impl PreSplitter {
         let n = geometry.triangle_count;
         let capacity = Self::capacity(n, budget);
         let heavy_capacity = Self::heavy_capacity(budget);
+        let heavy_bytes = u64::from(heavy_capacity.max(1)) * 4;
         if self
             .scratch
             .as_ref()
-            .is_none_or(|s| s.capacity < n || s.heavy_budget < budget)
+            .is_none_or(|s| s.capacity < n || s.heavy_refs.size() < heavy_bytes)
         {
             self.scratch = None;
             self.scratch = Some(Scratch {
@@ -145,9 +145,8 @@ impl PreSplitter {
                 heavy_refs: storage_buffer_zeroed(
                     ctx,
                     "references split one per invocation",
-                    u64::from(heavy_capacity.max(1)) * 4,
+                    heavy_bytes,
                 )?,
-                heavy_budget: budget,
             });
         }
         if self
