@@ -50,7 +50,7 @@ var<workgroup> next_size: atomic<u32>;
 fn main(@builtin(local_invocation_index) lid: u32) {
     let top = params.level_dispatches + 1u;
     let half = arrayLength(&waves) / 2u;
-    let first = level_start(top);
+    let first = params.level_first;
     let start = schedule[top - 1u];
     for (var i = lid; i < start; i += WORKGROUP) {
         waves[i] = roots[first + i];

@@ -32,7 +32,7 @@ fn main(
     @builtin(workgroup_id) wid: vec3<u32>,
     @builtin(num_workgroups) groups: vec3<u32>,
 ) {
-    let first = level_start(params.level);
+    let first = params.level_first;
     if lid == 0u {
         level_size = schedule[params.level - 1u];
     }

@@ -31,10 +31,12 @@ struct RoundParams {
     team_below: u32,
     // gamma of the next round (0xffffffff: none), whose levels the treelet kernels compute.
     next_gamma: u32,
+    // level_start(level), computed by the CPU (treelets_optimize: the level dispatched;
+    // treelets_climb: level_dispatches + 1).
+    level_first: u32,
     pad0: u32,
     pad1: u32,
     pad2: u32,
-    pad3: u32,
 }
 
 // The schedule buffer (u32 words): per level L = 1 ..= MAX_LEVEL_DISPATCHES + 1, the number of

@@ -55,7 +55,11 @@ pub struct RoundParams {
     team_below: u32,
     /// γ of the next round (u32::MAX: none), whose levels the treelet kernels compute.
     next_gamma: u32,
-    _pad: [u32; 4],
+    /// `level_start` of `level`: where the roots the dispatch optimizes start (of level
+    /// level_dispatches + 1 for the climb). Computed here once, not by every workgroup from
+    /// `level` − 1 divisions (a chain of dependent divisions before its first load).
+    level_first: u32,
+    _pad: [u32; 3],
 }
 const _: () = assert!(std::mem::size_of::<RoundParams>() == 64);
 
@@ -298,7 +302,8 @@ impl TreeletRounds {
             levels_only: u32::from(round.levels_only),
             team_below: self.schedule.team_below(),
             next_gamma: round.next_gamma,
-            _pad: [0; 4],
+            level_first: 0,
+            _pad: [0; 3],
         };
         let limit = count.limit(ctx);
         pass.dispatch(
@@ -337,8 +342,11 @@ impl TreeletRounds {
             &self.subsets,
             state.next_levels,
         ];
+        // The GPU's u32 sum wraps; truncating the exact sum gives the same word.
+        let first_slot = |level: u32| level_start(n, round.gamma, level) as u32;
         for level in 1..=dispatched {
             params.level = level;
+            params.level_first = first_slot(level);
             let args = 4 * (SCHEDULE_ARGS + 3 * u64::from(level - 1));
             pass.dispatch_indirect(
                 &kernels.optimize,
@@ -349,6 +357,8 @@ impl TreeletRounds {
             );
         }
         drop(pass);
+        params.level = dispatched + 1;
+        params.level_first = first_slot(dispatched + 1);
         let mut climb_buffers = treelet_buffers.to_vec();
         climb_buffers.extend([state.levels, state.arrivals, state.waves]);
         rec.pass("treelets climb").dispatch(
