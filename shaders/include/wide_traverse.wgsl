@@ -232,5 +232,7 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_ze
             group.y = ((group.y & 0xffffffu) >> 3u) | (((group.y >> 24u) - 1u) << 24u);
         }
     }
+    // Not reached (the loop ends by returning), but naga's validator wants a function with a
+    // result to end in a return.
     return TraceResult(best, overflow);
 }
