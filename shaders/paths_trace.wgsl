@@ -4,7 +4,7 @@
 #include "path_integrator.wgsl"
 
 @group(0) @binding(0) var<uniform> params: TraceParams;
-@group(0) @binding(1) var<storage, read> triangles: array<Triangle>;
+@group(0) @binding(1) var<storage, read> triangles: array<vec4<f32>>; // Triangle, three words each
 @group(0) @binding(2) var<storage, read> materials: array<Material>;
 @group(0) @binding(3) var<storage, read> nodes: array<BvhNode>;
 @group(0) @binding(4) var<storage, read> prim_indices: array<u32>;

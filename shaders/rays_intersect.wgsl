@@ -3,7 +3,7 @@
 #include "ray_queries.wgsl"
 
 @group(0) @binding(0) var<uniform> params: QueryParams;
-@group(0) @binding(1) var<storage, read> triangles: array<Triangle>;
+@group(0) @binding(1) var<storage, read> triangles: array<vec4<f32>>; // Triangle, three words each
 @group(0) @binding(2) var<storage, read> nodes: array<BvhNode>;
 @group(0) @binding(3) var<storage, read> prim_indices: array<u32>;
 @group(0) @binding(4) var<storage, read> rays: array<Ray>;

@@ -4,7 +4,7 @@
 #include "ray_queries.wgsl"
 
 @group(0) @binding(0) var<uniform> params: QueryParams;
-@group(0) @binding(1) var<storage, read> triangles: array<Triangle>;
+@group(0) @binding(1) var<storage, read> triangles: array<vec4<f32>>; // Triangle, three words each
 @group(0) @binding(2) var<storage, read> wide_nodes: array<vec4<u32>>; // WideNode, five words each
 @group(0) @binding(3) var<storage, read> prim_indices: array<u32>;
 @group(0) @binding(4) var<storage, read> rays: array<Ray>;

@@ -101,7 +101,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
                     radiance += throughput * sky_radiance(dir);
                     break;
                 }
-                let tri = triangles[hit.tri];
+                let tri = load_triangle(hit.tri);
                 let material = materials[tri.material];
                 radiance += throughput * material.emission;
                 throughput *= material.albedo;

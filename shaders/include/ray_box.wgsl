@@ -51,7 +51,7 @@ struct TraceResult {
 fn intersect_leaf(first: u32, end: u32, test: RayTriangleTest, t_min: f32, best: ptr<function, Hit>) {
     for (var i = first; i < end; i++) {
         let tri_index = prim_indices[i];
-        let h = intersect_triangle(test, triangles[tri_index], t_min, (*best).t);
+        let h = intersect_triangle(test, load_triangle(tri_index), t_min, (*best).t);
         if h.w != 0.0 {
             *best = Hit(h.x, tri_index, h.y, h.z);
         }

@@ -6,6 +6,15 @@
 // Needs `Triangle` (bvh_node.wgsl).
 #include "unfused.wgsl"
 
+// Triangle `index` of the including kernel's `triangles`, bound as array<vec4<f32>> (three
+// 16-byte words per triangle): three loads, not one per field.
+fn load_triangle(index: u32) -> Triangle {
+    let w0 = triangles[3u * index];
+    let w1 = triangles[3u * index + 1u];
+    let w2 = triangles[3u * index + 2u];
+    return Triangle(w0.xyz, bitcast<u32>(w0.w), w1.xyz, bitcast<u32>(w1.w), w2.xyz, bitcast<u32>(w2.w));
+}
+
 struct RayTriangleTest {
     origin: vec3<f32>,
     // Axis of the largest |direction| component (ties: x before y before z).
