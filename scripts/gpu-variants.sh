@@ -12,6 +12,8 @@
 #     per variant and scene, this commit's binary and the variant's in turn (TURNS times, default
 #     1: each bench already takes the median of its repeats after warm-up); JSON lines in
 #     $OUT/variants.jsonl and a table of build ms and Mrays/s (medians), main against variant.
+#     Variants run in the order ORDER gives (default: those whose answer decides the most first),
+#     then the other packed ones.
 #   A dry run of `run` on lavapipe, after `build` (SCENES and BENCH_OPTS replace every variant's):
 #     TREELET=target/release/treelet SCENES=cornell_box BENCH_OPTS="--builder trbvh --width 16
 #     --height 16 --spp 1 --repeats 1 --warmup-ms 0" bash scripts/gpu-variants.sh run
@@ -45,10 +47,13 @@ run)
   dir=/tmp/treelet-variants
   mkdir -p "$dir"
   : > "$out/variants.jsonl"
-  for f in .gpu/variant-*.xz; do
-    [ -f "$f" ] || { echo "no .gpu/variant-*.xz: run 'bash scripts/gpu-variants.sh build' first"; exit 1; }
-    name=$(basename "$f" .xz)
-    name=${name#variant-}
+  ls .gpu/variant-*.xz > /dev/null 2>&1 || { echo "no .gpu/variant-*.xz: run 'bash scripts/gpu-variants.sh build' first"; exit 1; }
+  # The variants whose answer decides the most first (a capped run keeps those), then any others.
+  first="${ORDER:-form-prefetch climb-256 split-inline wide-prefetch stack-32 dp-track binary-carry wide-octant}"
+  names=$( (for n in $first; do [ -f ".gpu/variant-$n.xz" ] && echo "$n"; done
+    for f in .gpu/variant-*.xz; do n=$(basename "$f" .xz); echo "${n#variant-}"; done) | awk '!seen[$0]++')
+  for name in $names; do
+    f=.gpu/variant-$name.xz
     patch=scripts/variants/$name.patch
     xz -dc "$f" > "$dir/$name" && chmod +x "$dir/$name"
     opts=${BENCH_OPTS:-$(sed -n 's/^# bench: //p' "$patch")}
