@@ -97,9 +97,9 @@ step layouts 80 env SCENES="conference crytek_sponza sibenik lost_empire armadil
   REPEATS=11 bash scripts/gpu-layouts.sh
 step profile 60 env SCENES="conference field:707 field:2000" TILES="default 8 16 32" BUILDERS=lbvh \
   REPEATS=5 bash scripts/gpu-profile.sh
-# Every kernel of the treelet builds, pre-splitting and the collapse included.
+# Every kernel of the treelet builds, pre-splitting, the collapse and the wide conversion included.
 step kernels 40 env NAME=kernels SCENES="conference field:707" TILES=default BUILDERS=trbvh,trbvh-split \
-  REPEATS=5 bash scripts/gpu-profile.sh
+  EXTRA="--layout wide" REPEATS=5 bash scripts/gpu-profile.sh
 
 echo "== summary (at $(elapsed) s)"
 echo "tests:"

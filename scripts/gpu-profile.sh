@@ -8,8 +8,9 @@
 # JSON lines go to $OUT/$NAME.jsonl (NAME: profile by default); printed last, per scene and
 # builder with the default tiles:
 # each stage's dispatches by kernel (count, total, min/median/max ms), then the treelet rounds
-# dispatch by dispatch; then build and sort ms per tile size. SCENES, BUILDERS, TILES and REPEATS
-# override the defaults; with TREELET set to a treelet binary it runs
+# dispatch by dispatch, and the wide conversion's levels when EXTRA="--layout wide" converts the
+# trees; then build and sort ms per tile size. SCENES, BUILDERS, TILES, REPEATS and EXTRA (more
+# bench options) override the defaults; with TREELET set to a treelet binary it runs
 # that one here instead (a dry run on lavapipe:
 # TREELET=target/release/treelet SCENES=field:100 REPEATS=1 bash scripts/gpu-profile.sh).
 set -u
@@ -20,7 +21,7 @@ for s in ${SCENES:-conference sibenik field:707 field:1000}; do
     opts=""
     [ "$tile" = default ] || opts="--sort-tile-items $tile"
     # shellcheck disable=SC2086
-    timeout 250 "$bin" bench --scene "$s" --builder "${BUILDERS:-lbvh,trbvh,trbvh-split}" $opts \
+    timeout 250 "$bin" bench --scene "$s" --builder "${BUILDERS:-lbvh,trbvh,trbvh-split}" $opts ${EXTRA:-} \
       --profile-dispatches --width 64 --height 64 --spp 1 --repeats "${REPEATS:-11}" \
       >> "$out/${NAME:-profile}.jsonl" 2>> "$out/${NAME:-profile}.log" \
       || echo "$s $tile: exit $? (see ${NAME:-profile}.log)"
@@ -43,6 +44,9 @@ for r in (r for r in rows if r["sort_tile_items"] is None):
     if rounds:
         print("  treelet rounds, in order (ms): " + " ".join(
             ("|" if x["kernel"] == "nodes_level" else "") + f"{x['ms'] or 0:.3f}" for x in rounds))
+    wide = [x for x in d if x["stage"] == "wide"]
+    if wide:
+        print("  wide conversion, in order (ms): " + " ".join(f"{x['ms'] or 0:.3f}" for x in wide))
 print("\nscene            builder      tile     build ms   sort ms  sah")
 for r in rows:
     tile = "default" if r["sort_tile_items"] is None else r["sort_tile_items"]
