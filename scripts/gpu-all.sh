@@ -5,7 +5,7 @@
 # scripts/gpu-probe.sh build` packed its variants), the changes of scripts/variants/ beside this
 # commit ("variants", when `bash scripts/gpu-variants.sh build` packed them), the binary-vs-wide
 # table, every dispatch of lbvh timed per sort tile and every dispatch of trbvh and trbvh-split
-# timed ("kernels"), in that order, each step capped so that the whole run ends within BUDGET
+# with the wide conversion timed ("kernels"), in that order, each step capped so that the whole run ends within BUDGET
 # seconds (default 500; STEPS picks some of the steps, e.g. STEPS="tests schedules"). After every
 # step the results so far are packed into $OUT/results.tar.gz, so a call stopped at its limit
 # still brings back what ran. A summary is printed last.
