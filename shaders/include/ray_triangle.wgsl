@@ -3,7 +3,8 @@
 // a closed mesh). Every product goes through `unfused` so that the compiler cannot fuse it into the
 // following add or subtract: hit-or-miss decisions then use only correctly rounded multiplies and
 // subtractions and equal the CPU's bit for bit; only the division for t may differ by a few ulps.
-// Needs `Triangle` (bvh_node.wgsl).
+// Needs `Triangle` (bvh_node.wgsl) and the including kernel's `triangles`, bound as array<vec4<f32>>
+// (`load_triangle`).
 #include "unfused.wgsl"
 
 // Triangle `index` of the including kernel's `triangles`, bound as array<vec4<f32>> (three
