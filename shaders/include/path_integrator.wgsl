@@ -69,7 +69,13 @@ fn cosine_direction(n: vec3<f32>, rng: ptr<function, u32>) -> vec3<f32> {
 }
 
 @compute @workgroup_size(8, 8, 1)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    // The workgroup's 8x8 pixels, numbered so that every 8 consecutive invocations cover a 4x2
+    // block and every 32 an 8x4 block (lid bits 0, 1, 3 are x, bits 2, 4, 5 are y): a CPU
+    // device's SIMD lanes (8 on lavapipe) and a GPU's subgroups trace neighbouring pixels,
+    // whose rays take similar paths through the tree. Each pixel's paths stay the same.
+    let block = vec2<u32>((lid & 3u) | ((lid >> 1u) & 4u), ((lid >> 2u) & 1u) | ((lid >> 3u) & 6u));
+    let coords = wid.xy * 8u + block;
     if lid == 0u {
         atomicStore(&workgroup_rays, 0u);
     }
@@ -78,15 +84,15 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
     var overflows = 0u;
     // One traversal stack for all of this invocation's rays (zero-filled once).
     var stack: TraversalStack;
-    if gid.x < params.width && gid.y < params.height {
-        let pixel = gid.y * params.width + gid.x;
+    if coords.x < params.width && coords.y < params.height {
+        let pixel = coords.y * params.width + coords.x;
         var rng = pcg_hash(pixel ^ pcg_hash(params.seed));
         var sum = vec3<f32>(0.0);
         for (var s = 0u; s < params.samples; s++) {
             let jitter = vec2<f32>(random_f32(&rng), random_f32(&rng));
             let ndc = vec2<f32>(
-                2.0 * (f32(gid.x) + jitter.x) / f32(params.width) - 1.0,
-                1.0 - 2.0 * (f32(gid.y) + jitter.y) / f32(params.height),
+                2.0 * (f32(coords.x) + jitter.x) / f32(params.width) - 1.0,
+                1.0 - 2.0 * (f32(coords.y) + jitter.y) / f32(params.height),
             );
             var origin = params.eye;
             var dir = normalize(params.forward + ndc.x * params.right + ndc.y * params.up);
