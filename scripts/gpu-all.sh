@@ -1,14 +1,14 @@
 #!/usr/bin/env bash
-# Everything a lent GPU is asked to measure, in one `device` call that fits a short lease: the
-# test binaries, the round schedule sweep (levels dispatched, LEVELS; team threshold, TEAMS; the
-# DP's forms), build scaling, where a treelet level's time goes ("probe", when `bash
-# scripts/gpu-probe.sh build` packed its variants), the changes of scripts/variants/ beside this
-# commit ("variants", when `bash scripts/gpu-variants.sh build` packed them), the binary-vs-wide
-# table, every dispatch of lbvh timed per sort tile and every dispatch of trbvh and trbvh-split
-# with the wide conversion timed ("kernels"), in that order, each step capped so that the whole run ends within BUDGET
-# seconds (default 500; STEPS picks some of the steps, e.g. STEPS="tests schedules"). After every
-# step the results so far are packed into $OUT/results.tar.gz, so a call stopped at its limit
-# still brings back what ran. A summary is printed last.
+# Everything a lent GPU is asked to measure, in one `device` call that fits a short lease: the test
+# binaries, the round schedule sweep (levels dispatched, LEVELS; team threshold, TEAMS; the DP's
+# forms), build scaling (also with the radix sort's staged scatter), where a treelet level's time
+# goes ("probe", when `bash scripts/gpu-probe.sh build` packed its variants), the changes of
+# scripts/variants/ beside this commit ("variants", when `bash scripts/gpu-variants.sh build` packed
+# them), the binary-vs-wide table, every dispatch of lbvh timed per sort tile and every dispatch of
+# trbvh and trbvh-split with the wide conversion timed ("kernels"), in that order, each step capped
+# so that the whole run ends within BUDGET seconds (default 500; STEPS picks some of the steps, e.g.
+# STEPS="tests schedules"). After every step the results so far are packed into $OUT/results.tar.gz,
+# so a call stopped at its limit still brings back what ran. A summary is printed last.
 # Here, first:   bash ../shared/gpu/pack.sh,   bash scripts/gpu-probe.sh build   and
 #   bash scripts/gpu-variants.sh build
 # (optionally also a baseline binary: xz -c OLD/treelet > .gpu/base-treelet.xz, timed beside the
@@ -69,6 +69,10 @@ scaling() {
   for s in conference field:707; do
     timeout 60 $TREELET bench --scene $s --builder trbvh --treelet-size 7,8 --rounds 2,3 $small >> $res/scaling.jsonl
   done
+  # The radix sort's staged scatter beside the direct default (the sort's share grows with n).
+  for s in field:2000 field:707 conference; do
+    timeout 40 $TREELET bench --scene $s --builder lbvh,trbvh --sort-writes staged $small >> $res/scaling.jsonl
+  done
   if [ -n "$base" ]; then
     for s in field:707 conference sibenik; do
       timeout 40 $base bench --scene $s --builder lbvh,trbvh,trbvh-split $small >> $res/baseline.jsonl
@@ -86,7 +90,7 @@ export -f tests
 step tests 150 bash -c tests
 step schedules 150 env SCENES="${SCHEDULE_SCENES:-conference crytek_sponza sibenik lost_empire field:224 field:707 field:2000}" \
   LEVELS="${LEVELS:-10,12,14,16,18,20}" TEAMS="${TEAMS:-0}" CLIMBS=" " REPEATS=11 bash scripts/gpu-schedules.sh
-step scaling 80 bash -c scaling
+step scaling 100 bash -c scaling
 if ls .gpu/probe-*.xz > /dev/null 2>&1; then
   step probe 40 env SCENES="conference" REPEATS=5 TREELET=$TREELET bash scripts/gpu-probe.sh run
 fi
@@ -121,7 +125,8 @@ for name in ("scaling.jsonl", "baseline.jsonl"):
         st = " ".join(f"{k} {v:.2f}" for k, v in (r.get("stages_ms") or {}).items() if v is not None)
         b = r.get("build_ms_spread") or {}
         preset = f"({r['treelet_size']},{r['rounds']})" if r.get("treelet_size") else ""
-        print(f"  {os.path.basename(r['scene'])[:14]:14} {r['builder']:11} {preset:6} {r['triangles']:>9}"
+        writes = r.get("sort_writes") or ""
+        print(f"  {os.path.basename(r['scene'])[:14]:14} {r['builder']:11} {preset:6} {writes:6} {r['triangles']:>9}"
               f" {b.get('min', 0):7.2f} {r['build_ms']:7.2f} {b.get('max', 0):7.2f}"
               f" {r.get('mtris_per_s') or 0:7.1f}  {st}  {r.get('sah') or 0:.4f}")
 PY

@@ -27,7 +27,16 @@
 // at most 512 per workgroup). The buffers rotate over three passes: the scatter reads `counts`,
 // adds into `next_counts`, which the dispatch before zeroed, and zeroes its tile's words of
 // `cleared_counts`, into which the scatter after it adds.
-// 11 KiB of workgroup memory; no subgroup operations.
+//
+// Staged writes (the override STAGED_PAIRS = 2048, `SortWrites::Staged`; 1: direct writes, the
+// default): the pairs ranked as above go first to workgroup memory, sorted by digit within the
+// tile's rounds of 2048 pairs (TILE_ITEMS / 8 rounds; a round is ranked by its 256 / rounds
+// invocations, which own its pairs), and after a barrier all 256 invocations write the round out in
+// order, so that neighbouring invocations write neighbouring slots of each digit's run: coalesced
+// stores where the direct scatter has each invocation write a run of its own (one memory sector per
+// pair and invocation, which a GPU's cache merges only while the output fits in it). The values
+// stage in `digit_counts`, free once the ranks are known.
+// 12 KiB of workgroup memory, 28 KiB staged (`STAGED_WORKGROUP_BYTES`); no subgroup operations.
 // Tiles are linear workgroup indices over a 1D or 2D grid: wid.x + wid.y * num_workgroups.x.
 // Tile geometry, parameters and digit counting are shared with keys_histogram.wgsl
 // (radix_digits.wgsl).
@@ -54,6 +63,20 @@ var<workgroup> tile_offsets: array<u32, 16>;
 // [digit d][the first or second output tile of d's pairs][next digit]: pairs of this tile
 // (zero-initialized, as all workgroup memory).
 var<workgroup> next_digit_counts: array<atomic<u32>, 512>;
+
+// Pairs staged per round: 2048 (staged writes) or 1 (direct scatter). Set per pipeline by
+// `sort::RadixSort`.
+override STAGED_PAIRS: u32 = 1u;
+// Rounds of staged pairs per tile (1 for the direct scatter).
+override STAGE_ROUNDS: u32 = select(1u, TILE_ITEMS / 8u, STAGED_PAIRS > 1u);
+// The keys of a round, in digit order (the values go to `digit_counts`).
+var<workgroup> staged_keys: array<vec2<u32>, STAGED_PAIRS>;
+// Per round r < STAGE_ROUNDS and digit d, entry 16r + d: the output slot of the round's first
+// pair of digit d, and where its pairs of digit d start among the round's staged pairs.
+var<workgroup> round_first: array<u32, 64>;
+var<workgroup> round_start: array<u32, 64>;
+// The tile's counts of digits 2w (low half) and 2w + 1 (high half).
+var<workgroup> tile_counts: array<u32, 8>;
 
 // Fills `tile_offsets`: offset(d, tile) from the counts of all tiles (see the header). Uses
 // `digit_counts` as scratch; ends with a barrier.
@@ -96,6 +119,42 @@ fn first_slot(d: u32, lid: u32) -> u32 {
     let w = d >> 1u;
     let local = digit_counts[w * WORKGROUP + lid] + segments[w * 32u + lid / 8u];
     return tile_offsets[d] + ((local >> ((d & 1u) * 16u)) & 0xffffu);
+}
+
+// The output position after the tile's last pair of digit d.
+fn tile_end(d: u32) -> u32 {
+    return tile_offsets[d] + ((tile_counts[d >> 1u] >> ((d & 1u) * 16u)) & 0xffffu);
+}
+
+// Fills `round_first` and `round_start` (staged writes), while `digit_counts` still holds the
+// ranks; ends with a barrier.
+fn compute_rounds(lid: u32) {
+    let invocations = WORKGROUP / STAGE_ROUNDS;
+    if lid < 16u * STAGE_ROUNDS {
+        let round = lid / 16u;
+        let d = lid % 16u;
+        var start = 0u;
+        for (var e = 0u; e < d; e++) {
+            let end = select(tile_end(e), first_slot(e, (round + 1u) * invocations), round + 1u < STAGE_ROUNDS);
+            start += end - first_slot(e, round * invocations);
+        }
+        round_first[lid] = first_slot(d, round * invocations);
+        round_start[lid] = start;
+    }
+    workgroupBarrier();
+}
+
+// Writes round `round`'s staged pairs (the pairs from `base`) to their output slots, neighbouring
+// invocations to neighbouring slots.
+fn write_round(lid: u32, round: u32, base: u32, n: u32) {
+    let count = min(select(0u, n - base, n > base), STAGED_PAIRS);
+    for (var j = lid; j < count; j += WORKGROUP) {
+        let key = staged_keys[j];
+        let at = 16u * round + digit_of(key);
+        let dest = round_first[at] + j - round_start[at];
+        keys_out[dest] = key;
+        values_out[dest] = digit_counts[j];
+    }
 }
 
 @compute @workgroup_size(256)
@@ -145,29 +204,51 @@ fn main(
             segments[lid * 32u + j] = total;
             total += c;
         }
+        tile_counts[lid] = total;
     }
     workgroupBarrier();
     let slots0 = vec4<u32>(first_slot(0u, lid), first_slot(1u, lid), first_slot(2u, lid), first_slot(3u, lid));
     let slots1 = vec4<u32>(first_slot(4u, lid), first_slot(5u, lid), first_slot(6u, lid), first_slot(7u, lid));
     let slots2 = vec4<u32>(first_slot(8u, lid), first_slot(9u, lid), first_slot(10u, lid), first_slot(11u, lid));
     let slots3 = vec4<u32>(first_slot(12u, lid), first_slot(13u, lid), first_slot(14u, lid), first_slot(15u, lid));
-    var seen = vec4<u32>(0u);
-    for (var i = 0u; i < TILE_ITEMS; i++) {
-        let item = first + i;
-        if item < n {
-            let key = keys_in[item];
-            let d = digit_of(key);
-            let q = d >> 2u;
-            let slots = select(select(slots0, slots1, q == 1u), select(slots2, slots3, q == 3u), q >= 2u);
-            let dest = pick(slots, d & 3u) + ((pick(seen, q) >> ((d & 3u) * 8u)) & 0xffu);
-            seen += one_hot(d);
-            keys_out[dest] = key;
-            values_out[dest] = values_in[item];
-            if gather_next {
-                let second_tile = dest / size - tile_offsets[d] / size;
-                let next = digit_at(key, params.next_shift, params.next_bits);
-                atomicAdd(&next_digit_counts[(d * 2u + second_tile) * 16u + next], 1u);
+    if STAGED_PAIRS > 1u {
+        compute_rounds(lid);
+    }
+    // Each round's invocations rank their pairs; staged, the whole workgroup then writes them.
+    let my_round = lid / (WORKGROUP / STAGE_ROUNDS);
+    for (var round = 0u; round < STAGE_ROUNDS; round++) {
+        if my_round == round {
+            var seen = vec4<u32>(0u);
+            for (var i = 0u; i < TILE_ITEMS; i++) {
+                let item = first + i;
+                if item < n {
+                    let key = keys_in[item];
+                    let d = digit_of(key);
+                    let q = d >> 2u;
+                    let slots = select(select(slots0, slots1, q == 1u), select(slots2, slots3, q == 3u), q >= 2u);
+                    let dest = pick(slots, d & 3u) + ((pick(seen, q) >> ((d & 3u) * 8u)) & 0xffu);
+                    seen += one_hot(d);
+                    if STAGED_PAIRS > 1u {
+                        let at = 16u * round + d;
+                        let local = round_start[at] + dest - round_first[at];
+                        staged_keys[local] = key;
+                        digit_counts[local] = values_in[item];
+                    } else {
+                        keys_out[dest] = key;
+                        values_out[dest] = values_in[item];
+                    }
+                    if gather_next {
+                        let second_tile = dest / size - tile_offsets[d] / size;
+                        let next = digit_at(key, params.next_shift, params.next_bits);
+                        atomicAdd(&next_digit_counts[(d * 2u + second_tile) * 16u + next], 1u);
+                    }
+                }
             }
+        }
+        if STAGED_PAIRS > 1u {
+            workgroupBarrier();
+            write_round(lid, round, tile * size + round * STAGED_PAIRS, n);
+            workgroupBarrier();
         }
     }
     if gather_next {

@@ -19,6 +19,15 @@
 //!    next pass would otherwise need. Three counts buffers rotate: pass p reads buffer p mod 3,
 //!    adds into p + 1 (zeroed by the dispatch before) and zeroes p + 2.
 //!
+//! Writes (`SortWrites`): each invocation scatters its own pairs (`Direct`, the default), or the
+//! pairs ranked by a round of invocations are staged in workgroup memory in digit order and the
+//! whole workgroup writes them out, neighbouring invocations to neighbouring slots (`Staged`, on
+//! devices whose workgroup memory holds the 28 KiB it takes): coalesced stores instead of a memory
+//! sector per pair and invocation. Both give the same result. Staged writes are for GPUs, where
+//! scattered stores cost most once the output outgrows the cache (an H200 sorted 8.7M pairs at
+//! ~0.3 TB/s); not yet timed on one, so not the default (`bench --sort-writes`). On lavapipe
+//! they cost the sort 1.7-2.6x (stores are scalar there either way).
+//!
 //! Digit width: 4 bits, measured about 2.5x faster on the software driver (lavapipe, 2 cores,
 //! 1M pairs, 63-bit keys: about 0.14 s) than 8-bit digits ranked by workgroup-memory "ballots"
 //! (match ranking with two barriers per 256 pairs): 16 counters fit in one vec4 of byte-wide
@@ -72,6 +81,55 @@ pub fn tile_items(len: u32, device: wgpu::DeviceType) -> u32 {
             .into_iter()
             .find(|&items| len.div_ceil(SORT_WORKGROUP * items) <= GPU_TILES)
             .unwrap_or(SORT_TILE_ITEMS[2]),
+    }
+}
+
+/// How a scatter pass writes its pairs (`keys_scatter.wgsl`); the result is the same.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SortWrites {
+    /// Each invocation writes the pairs it ranked, a run of slots per digit of its own.
+    Direct,
+    /// A round of ranked pairs goes to workgroup memory in digit order, then every invocation
+    /// writes neighbouring slots.
+    Staged,
+}
+
+/// Workgroup memory a staged scatter declares (keys_scatter.wgsl's and radix_digits.wgsl's
+/// workgroup variables with STAGED_PAIRS = 2048: 16 KiB of them the staged keys).
+const STAGED_WORKGROUP_BYTES: u32 = 28_256;
+/// Pairs a staged scatter stages at once (`STAGED_PAIRS` in keys_scatter.wgsl).
+const STAGED_PAIRS: u32 = 2048;
+
+impl SortWrites {
+    /// `self` if `device` can run it, else a clear error (a staged scatter needs 28 KiB of
+    /// workgroup memory).
+    pub fn check(self, device: &wgpu::Device) -> Result<Self> {
+        let limit = device.limits().max_compute_workgroup_storage_size;
+        if self == Self::Staged && limit < STAGED_WORKGROUP_BYTES {
+            return Err(Error::InvalidArgument(format!(
+                "staged sort writes need {STAGED_WORKGROUP_BYTES} bytes of workgroup memory, this \
+                 device has {limit}"
+            )));
+        }
+        Ok(self)
+    }
+
+    /// `direct` or `staged`, else a clear error.
+    pub fn parse(name: &str) -> Result<Self> {
+        match name {
+            "direct" => Ok(Self::Direct),
+            "staged" => Ok(Self::Staged),
+            _ => Err(Error::InvalidArgument(format!(
+                "sort writes must be direct or staged, got '{name}'"
+            ))),
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Direct => "direct",
+            Self::Staged => "staged",
+        }
     }
 }
 
@@ -141,25 +199,50 @@ impl Scratch {
     }
 }
 
-/// The kernels of one tile size (`SORT_TILE_ITEMS`, the WGSL override `TILE_ITEMS`).
+/// The kernels of one tile size (`SORT_TILE_ITEMS`, the WGSL override `TILE_ITEMS`); each
+/// scatter is compiled when first used.
 struct TileKernels {
+    variant: usize,
     histogram: Kernel<SortParams>,
-    scatter: Kernel<SortParams>,
+    direct_scatter: Option<Kernel<SortParams>>,
+    staged_scatter: Option<Kernel<SortParams>>,
 }
 
 impl TileKernels {
     /// The kernels of tile size `SORT_TILE_ITEMS[variant]`.
     fn new(ctx: &GpuContext, variant: usize) -> Self {
+        let tile = [tile_override(variant)];
         Self {
-            histogram: Kernel::with_overrides(ctx, &KEYS_HISTOGRAM, &tile_override(variant)),
-            scatter: Kernel::with_overrides(ctx, &KEYS_SCATTER, &tile_override(variant)),
+            variant,
+            histogram: Kernel::with_overrides(ctx, &KEYS_HISTOGRAM, &tile),
+            direct_scatter: None,
+            staged_scatter: None,
         }
+    }
+
+    /// The histogram, and the scatter that writes as `writes` says.
+    fn pair(
+        &mut self,
+        ctx: &GpuContext,
+        writes: SortWrites,
+    ) -> (&Kernel<SortParams>, &Kernel<SortParams>) {
+        let tile = tile_override(self.variant);
+        let scatter = match writes {
+            SortWrites::Direct => self
+                .direct_scatter
+                .get_or_insert_with(|| Kernel::with_overrides(ctx, &KEYS_SCATTER, &[tile])),
+            SortWrites::Staged => self.staged_scatter.get_or_insert_with(|| {
+                let staged = ("STAGED_PAIRS", f64::from(STAGED_PAIRS));
+                Kernel::with_overrides(ctx, &KEYS_SCATTER, &[tile, staged])
+            }),
+        };
+        (&self.histogram, scatter)
     }
 }
 
 /// The override of tile size `SORT_TILE_ITEMS[variant]`.
-fn tile_override(variant: usize) -> [(&'static str, f64); 1] {
-    [("TILE_ITEMS", f64::from(SORT_TILE_ITEMS[variant]))]
+fn tile_override(variant: usize) -> (&'static str, f64) {
+    ("TILE_ITEMS", f64::from(SORT_TILE_ITEMS[variant]))
 }
 
 /// The GPU radix sort: kernels created per tile size when first used, scratch buffers grown on
@@ -171,6 +254,8 @@ pub struct RadixSort {
     /// Keys per invocation of every sort (one of `SORT_TILE_ITEMS`); None: the context's
     /// `sort_tile_items`, else `tile_items` of the length and device.
     fixed_tile_items: Option<u32>,
+    /// How every sort writes; None: the context's `sort_writes`, else `SortWrites::Direct`.
+    fixed_writes: Option<SortWrites>,
     /// Parameters of the sorts `sort_pairs` records and submits itself.
     params: ParamSlab,
 }
@@ -185,6 +270,7 @@ impl RadixSort {
             scratch: None,
             max_workgroups_per_dimension: u32::MAX,
             fixed_tile_items: None,
+            fixed_writes: None,
             params: ParamSlab::new(ctx),
         }
     }
@@ -193,6 +279,12 @@ impl RadixSort {
     /// device (tests; the result is the same for every tile).
     pub fn with_tile_items(mut self, items: u32) -> Result<Self> {
         self.fixed_tile_items = Some(check_tile_items(items)?);
+        Ok(self)
+    }
+
+    /// Writes as `writes` says, if the device can (tests; the result is the same).
+    pub fn with_writes(mut self, ctx: &GpuContext, writes: SortWrites) -> Result<Self> {
+        self.fixed_writes = Some(writes.check(&ctx.device)?);
         Ok(self)
     }
 
@@ -258,7 +350,13 @@ impl RadixSort {
             .iter()
             .position(|&i| i == items)
             .expect("a tile size of SORT_TILE_ITEMS");
-        let kernels = &*self.kernels[variant].get_or_insert_with(|| TileKernels::new(ctx, variant));
+        let writes = self
+            .fixed_writes
+            .or(ctx.sort_writes)
+            .unwrap_or(SortWrites::Direct);
+        let (histogram, scatter) = self.kernels[variant]
+            .get_or_insert_with(|| TileKernels::new(ctx, variant))
+            .pair(ctx, writes);
         let num_tiles = len.div_ceil(SORT_WORKGROUP * items);
         let max = self
             .max_workgroups_per_dimension
@@ -277,7 +375,7 @@ impl RadixSort {
         let mut pass = rec.pass("sort");
         let counts = &scratch.counts;
         pass.dispatch(
-            &kernels.histogram,
+            histogram,
             tile_grid,
             &SortParams::pass(len, num_tiles, key_bits, 0),
             &[src.0, &counts[0], &counts[1], limit],
@@ -285,7 +383,7 @@ impl RadixSort {
         for p in 0..passes {
             let rotation = p as usize;
             pass.dispatch(
-                &kernels.scatter,
+                scatter,
                 tile_grid,
                 &SortParams::pass(len, num_tiles, key_bits, p),
                 &[
