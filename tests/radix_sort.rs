@@ -283,11 +283,17 @@ fn cpu_twin_matches_sort_unstable() {
 
 /// A pair count computed on the GPU (here written by a buffer copy in the same recording): the
 /// passes are sized for the capacity, the first `count` pairs end sorted and the pairs past them
-/// are left as they are.
+/// are left as they are; with direct and with staged writes (a count ending inside a round).
 #[test]
 fn a_count_on_the_gpu_sorts_only_its_pairs() {
+    for writes in [SortWrites::Direct, SortWrites::Staged] {
+        a_count_on_the_gpu_sorts_only_its_pairs_writing(writes);
+    }
+}
+
+fn a_count_on_the_gpu_sorts_only_its_pairs_writing(writes: SortWrites) {
     let ctx = gpu();
-    let mut sorter = RadixSort::new(ctx);
+    let mut sorter = RadixSort::new(ctx).with_writes(ctx, writes).unwrap();
     for (capacity, count, bits) in [(40_000usize, 29_999usize, 63), (9000, 8192, 32), (5, 2, 63)] {
         let keys = random_keys(capacity, bits, capacity as u64);
         let split_keys: Vec<[u32; 2]> = keys.iter().map(|&k| split(k)).collect();
