@@ -29,14 +29,15 @@
 // `cleared_counts`, into which the scatter after it adds.
 //
 // Staged writes (the override STAGED_PAIRS = 2048, `SortWrites::Staged`; 1: direct writes, the
-// default): the pairs ranked as above go first to workgroup memory, sorted by digit within the
-// tile's rounds of 2048 pairs (TILE_ITEMS / 8 rounds; a round is ranked by its 256 / rounds
-// invocations, which own its pairs), and after a barrier all 256 invocations write the round out in
-// order, so that neighbouring invocations write neighbouring slots of each digit's run: coalesced
-// stores where the direct scatter has each invocation write a run of its own (one memory sector per
-// pair and invocation, which a GPU's cache merges only while the output fits in it). The values
-// stage in `digit_counts`, free once the ranks are known.
-// 12 KiB of workgroup memory, 28 KiB staged (`STAGED_WORKGROUP_BYTES`); no subgroup operations.
+// default): the tile is ranked in rounds of 2048 pairs (TILE_ITEMS / 8 of them), each by all 256
+// invocations, 8 pairs each, as above, with the tile's digit offsets carried from round to round
+// (`round_offsets`). A round's pairs go to workgroup memory in digit order, and after a barrier
+// invocation j writes staged pair j to its slot, so neighbouring invocations write neighbouring
+// slots of each digit's run: coalesced stores where the direct scatter has each invocation write a
+// run of its own (one memory sector per pair and invocation, which a GPU's cache merges only while
+// the output fits in it). The values stage in `digit_counts`, free once the round's ranks are
+// known.
+// 11 KiB of workgroup memory, 27 KiB staged (`STAGED_WORKGROUP_BYTES`); no subgroup operations.
 // Tiles are linear workgroup indices over a 1D or 2D grid: wid.x + wid.y * num_workgroups.x.
 // Tile geometry, parameters and digit counting are shared with keys_histogram.wgsl
 // (radix_digits.wgsl).
@@ -67,16 +68,20 @@ var<workgroup> next_digit_counts: array<atomic<u32>, 512>;
 // Pairs staged per round: 2048 (staged writes) or 1 (direct scatter). Set per pipeline by
 // `sort::RadixSort`.
 override STAGED_PAIRS: u32 = 1u;
-// Rounds of staged pairs per tile (1 for the direct scatter).
-override STAGE_ROUNDS: u32 = select(1u, TILE_ITEMS / 8u, STAGED_PAIRS > 1u);
+// Pairs per invocation and round: a staged round is 2048 pairs, 8 per invocation; the direct
+// scatter ranks its whole tile in one round.
+override RUN_ITEMS: u32 = select(TILE_ITEMS, 8u, STAGED_PAIRS > 1u);
+// Rounds per tile.
+override ROUNDS: u32 = TILE_ITEMS / RUN_ITEMS;
 // The keys of a round, in digit order (the values go to `digit_counts`).
 var<workgroup> staged_keys: array<vec2<u32>, STAGED_PAIRS>;
-// Per round r < STAGE_ROUNDS and digit d, entry 16r + d: the output slot of the round's first
-// pair of digit d, and where its pairs of digit d start among the round's staged pairs.
-var<workgroup> round_first: array<u32, 64>;
-var<workgroup> round_start: array<u32, 64>;
-// The tile's counts of digits 2w (low half) and 2w + 1 (high half).
-var<workgroup> tile_counts: array<u32, 8>;
+// Per digit: the output slot of the round's first pair of that digit (the tile's offset plus the
+// pairs of that digit in earlier rounds), and where the round's pairs of the digit start among
+// its staged pairs.
+var<workgroup> round_offsets: array<u32, 16>;
+var<workgroup> staged_starts: array<u32, 16>;
+// The round's counts of digits 2w (low half) and 2w + 1 (high half).
+var<workgroup> round_counts: array<u32, 8>;
 
 // Fills `tile_offsets`: offset(d, tile) from the counts of all tiles (see the header). Uses
 // `digit_counts` as scratch; ends with a barrier.
@@ -114,69 +119,26 @@ fn compute_tile_offsets(lid: u32, tile: u32) {
     workgroupBarrier();
 }
 
-// First output position of digit d for invocation lid's pairs.
+// First output position of digit d for invocation lid's pairs of this round.
 fn first_slot(d: u32, lid: u32) -> u32 {
     let w = d >> 1u;
     let local = digit_counts[w * WORKGROUP + lid] + segments[w * 32u + lid / 8u];
-    return tile_offsets[d] + ((local >> ((d & 1u) * 16u)) & 0xffffu);
+    return round_offsets[d] + ((local >> ((d & 1u) * 16u)) & 0xffffu);
 }
 
-// The output position after the tile's last pair of digit d.
-fn tile_end(d: u32) -> u32 {
-    return tile_offsets[d] + ((tile_counts[d >> 1u] >> ((d & 1u) * 16u)) & 0xffffu);
+// The round's count of digit d.
+fn round_count(d: u32) -> u32 {
+    return (round_counts[d >> 1u] >> ((d & 1u) * 16u)) & 0xffffu;
 }
 
-// Fills `round_first` and `round_start` (staged writes), while `digit_counts` still holds the
-// ranks; ends with a barrier.
-fn compute_rounds(lid: u32) {
-    let invocations = WORKGROUP / STAGE_ROUNDS;
-    if lid < 16u * STAGE_ROUNDS {
-        let round = lid / 16u;
-        let d = lid % 16u;
-        var start = 0u;
-        for (var e = 0u; e < d; e++) {
-            let end = select(tile_end(e), first_slot(e, (round + 1u) * invocations), round + 1u < STAGE_ROUNDS);
-            start += end - first_slot(e, round * invocations);
-        }
-        round_first[lid] = first_slot(d, round * invocations);
-        round_start[lid] = start;
-    }
-    workgroupBarrier();
-}
-
-// Writes round `round`'s staged pairs (the pairs from `base`) to their output slots, neighbouring
-// invocations to neighbouring slots.
-fn write_round(lid: u32, round: u32, base: u32, n: u32) {
-    let count = min(select(0u, n - base, n > base), STAGED_PAIRS);
-    for (var j = lid; j < count; j += WORKGROUP) {
-        let key = staged_keys[j];
-        let at = 16u * round + digit_of(key);
-        let dest = round_first[at] + j - round_start[at];
-        keys_out[dest] = key;
-        values_out[dest] = digit_counts[j];
-    }
-}
-
-@compute @workgroup_size(256)
-fn main(
-    @builtin(local_invocation_index) lid: u32,
-    @builtin(workgroup_id) wid: vec3<u32>,
-    @builtin(num_workgroups) nwg: vec3<u32>,
-) {
-    let tile = wid.x + wid.y * nwg.x;
-    if tile >= params.num_tiles {
-        return;
-    }
-    let gather_next = params.next_bits != 0u;
-    if gather_next && lid < 16u {
-        cleared_counts[lid * params.num_tiles + tile] = 0u;
-    }
-    compute_tile_offsets(lid, tile);
-    let size = tile_size();
-    let first = tile * size + lid * TILE_ITEMS;
-    let n = sort_count();
+// Ranks the round's pairs [first_item, first_item + 256 * RUN_ITEMS): the per-invocation digit
+// counts, their exclusive scan over invocations, then each pair's output slot (see the header);
+// the direct scatter writes each pair there, the staged one at its position in digit order in
+// `staged_keys` and `digit_counts`. Counts the next pass's digits on the way.
+fn rank_round(lid: u32, first_item: u32, n: u32, gather_next: bool) {
+    let first = first_item + lid * RUN_ITEMS;
     var count = vec4<u32>(0u);
-    for (var i = 0u; i < TILE_ITEMS; i++) {
+    for (var i = 0u; i < RUN_ITEMS; i++) {
         let item = first + i;
         if item < n {
             count += one_hot(digit_of(keys_in[item]));
@@ -185,7 +147,7 @@ fn main(
     store_digit_counts(count, lid);
     workgroupBarrier();
     // Invocation lid scans invocations [8s, 8s + 8) of word w (two digits at once: the halves
-    // never carry, tile counts stay below 2^16).
+    // never carry, round counts stay below 2^16).
     let w = lid / 32u;
     let s = lid % 32u;
     var run = 0u;
@@ -204,7 +166,7 @@ fn main(
             segments[lid * 32u + j] = total;
             total += c;
         }
-        tile_counts[lid] = total;
+        round_counts[lid] = total;
     }
     workgroupBarrier();
     let slots0 = vec4<u32>(first_slot(0u, lid), first_slot(1u, lid), first_slot(2u, lid), first_slot(3u, lid));
@@ -212,43 +174,92 @@ fn main(
     let slots2 = vec4<u32>(first_slot(8u, lid), first_slot(9u, lid), first_slot(10u, lid), first_slot(11u, lid));
     let slots3 = vec4<u32>(first_slot(12u, lid), first_slot(13u, lid), first_slot(14u, lid), first_slot(15u, lid));
     if STAGED_PAIRS > 1u {
-        compute_rounds(lid);
+        if lid < 16u {
+            var start = 0u;
+            for (var e = 0u; e < lid; e++) {
+                start += round_count(e);
+            }
+            staged_starts[lid] = start;
+        }
+        // The slots are read: `digit_counts` may take the staged values.
+        workgroupBarrier();
     }
-    // Each round's invocations rank their pairs; staged, the whole workgroup then writes them.
-    let my_round = lid / (WORKGROUP / STAGE_ROUNDS);
-    for (var round = 0u; round < STAGE_ROUNDS; round++) {
-        if my_round == round {
-            var seen = vec4<u32>(0u);
-            for (var i = 0u; i < TILE_ITEMS; i++) {
-                let item = first + i;
-                if item < n {
-                    let key = keys_in[item];
-                    let d = digit_of(key);
-                    let q = d >> 2u;
-                    let slots = select(select(slots0, slots1, q == 1u), select(slots2, slots3, q == 3u), q >= 2u);
-                    let dest = pick(slots, d & 3u) + ((pick(seen, q) >> ((d & 3u) * 8u)) & 0xffu);
-                    seen += one_hot(d);
-                    if STAGED_PAIRS > 1u {
-                        let at = 16u * round + d;
-                        let local = round_start[at] + dest - round_first[at];
-                        staged_keys[local] = key;
-                        digit_counts[local] = values_in[item];
-                    } else {
-                        keys_out[dest] = key;
-                        values_out[dest] = values_in[item];
-                    }
-                    if gather_next {
-                        let second_tile = dest / size - tile_offsets[d] / size;
-                        let next = digit_at(key, params.next_shift, params.next_bits);
-                        atomicAdd(&next_digit_counts[(d * 2u + second_tile) * 16u + next], 1u);
-                    }
-                }
+    let size = tile_size();
+    var seen = vec4<u32>(0u);
+    for (var i = 0u; i < RUN_ITEMS; i++) {
+        let item = first + i;
+        if item < n {
+            let key = keys_in[item];
+            let d = digit_of(key);
+            let q = d >> 2u;
+            let slots = select(select(slots0, slots1, q == 1u), select(slots2, slots3, q == 3u), q >= 2u);
+            let dest = pick(slots, d & 3u) + ((pick(seen, q) >> ((d & 3u) * 8u)) & 0xffu);
+            seen += one_hot(d);
+            if STAGED_PAIRS > 1u {
+                let local = staged_starts[d] + dest - round_offsets[d];
+                staged_keys[local] = key;
+                digit_counts[local] = values_in[item];
+            } else {
+                keys_out[dest] = key;
+                values_out[dest] = values_in[item];
+            }
+            if gather_next {
+                let second_tile = dest / size - tile_offsets[d] / size;
+                let next = digit_at(key, params.next_shift, params.next_bits);
+                atomicAdd(&next_digit_counts[(d * 2u + second_tile) * 16u + next], 1u);
             }
         }
-        if STAGED_PAIRS > 1u {
-            workgroupBarrier();
-            write_round(lid, round, tile * size + round * STAGED_PAIRS, n);
-            workgroupBarrier();
+    }
+}
+
+// Writes the round's staged pairs (`count` of them) to their output slots, neighbouring
+// invocations to neighbouring slots, and moves `round_offsets` past them; ends with a barrier.
+fn write_round(lid: u32, count: u32) {
+    workgroupBarrier();
+    for (var j = lid; j < count; j += WORKGROUP) {
+        let key = staged_keys[j];
+        let d = digit_of(key);
+        let dest = round_offsets[d] + j - staged_starts[d];
+        keys_out[dest] = key;
+        values_out[dest] = digit_counts[j];
+    }
+    workgroupBarrier();
+    if lid < 16u {
+        round_offsets[lid] += round_count(lid);
+    }
+    workgroupBarrier();
+}
+
+@compute @workgroup_size(256)
+fn main(
+    @builtin(local_invocation_index) lid: u32,
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+) {
+    let tile = wid.x + wid.y * nwg.x;
+    if tile >= params.num_tiles {
+        return;
+    }
+    let gather_next = params.next_bits != 0u;
+    if gather_next && lid < 16u {
+        cleared_counts[lid * params.num_tiles + tile] = 0u;
+    }
+    compute_tile_offsets(lid, tile);
+    if lid < 16u {
+        round_offsets[lid] = tile_offsets[lid];
+    }
+    let n = sort_count();
+    // One round (direct), or the tile's rounds of 2048 pairs one after another (staged). The
+    // direct scatter's round is outside the loop: lavapipe runs barriers in a loop, even one
+    // that runs once, at a cost (its sort took 1.7x as long).
+    rank_round(lid, tile * tile_size(), n, gather_next);
+    if STAGED_PAIRS > 1u {
+        for (var round = 0u; round < ROUNDS; round++) {
+            let first = tile * tile_size() + round * STAGED_PAIRS;
+            if round > 0u {
+                rank_round(lid, first, n, gather_next);
+            }
+            write_round(lid, min(select(0u, n - first, n > first), STAGED_PAIRS));
         }
     }
     if gather_next {
@@ -256,7 +267,7 @@ fn main(
         for (var i = lid; i < 512u; i += WORKGROUP) {
             let count = atomicLoad(&next_digit_counts[i]);
             if count != 0u {
-                let output_tile = tile_offsets[i >> 5u] / size + ((i >> 4u) & 1u);
+                let output_tile = tile_offsets[i >> 5u] / tile_size() + ((i >> 4u) & 1u);
                 atomicAdd(&next_counts[(i & 15u) * params.num_tiles + output_tile], count);
             }
         }

@@ -20,13 +20,13 @@
 //!    adds into p + 1 (zeroed by the dispatch before) and zeroes p + 2.
 //!
 //! Writes (`SortWrites`): each invocation scatters its own pairs (`Direct`, the default), or the
-//! pairs ranked by a round of invocations are staged in workgroup memory in digit order and the
-//! whole workgroup writes them out, neighbouring invocations to neighbouring slots (`Staged`, on
-//! devices whose workgroup memory holds the 28 KiB it takes): coalesced stores instead of a memory
-//! sector per pair and invocation. Both give the same result. Staged writes are for GPUs, where
-//! scattered stores cost most once the output outgrows the cache (an H200 sorted 8.7M pairs at
-//! ~0.3 TB/s); not yet timed on one, so not the default (`bench --sort-writes`). On lavapipe
-//! they cost the sort 1.7-2.6x (stores are scalar there either way).
+//! tile is ranked in rounds of 2048 pairs whose pairs are staged in workgroup memory in digit
+//! order and written out by the whole workgroup, neighbouring invocations to neighbouring slots
+//! (`Staged`, on devices whose workgroup memory holds the 27 KiB it takes): coalesced stores
+//! instead of a memory sector per pair and invocation. Both give the same result. Staged writes
+//! are for GPUs, where scattered stores cost most once the output outgrows the cache (an H200
+//! sorted 8.7M pairs at ~0.3 TB/s); not yet timed on one, so not the default (`bench
+//! --sort-writes`). On lavapipe they cost the sort 1.6-3.4x (stores are scalar there either way).
 //!
 //! Digit width: 4 bits, measured about 2.5x faster on the software driver (lavapipe, 2 cores,
 //! 1M pairs, 63-bit keys: about 0.14 s) than 8-bit digits ranked by workgroup-memory "ballots"
@@ -96,12 +96,12 @@ pub enum SortWrites {
 
 /// Workgroup memory a staged scatter declares (keys_scatter.wgsl's and radix_digits.wgsl's
 /// workgroup variables with STAGED_PAIRS = 2048: 16 KiB of them the staged keys).
-const STAGED_WORKGROUP_BYTES: u32 = 28_256;
+const STAGED_WORKGROUP_BYTES: u32 = 27_872;
 /// Pairs a staged scatter stages at once (`STAGED_PAIRS` in keys_scatter.wgsl).
 const STAGED_PAIRS: u32 = 2048;
 
 impl SortWrites {
-    /// `self` if `device` can run it, else a clear error (a staged scatter needs 28 KiB of
+    /// `self` if `device` can run it, else a clear error (a staged scatter needs 27 KiB of
     /// workgroup memory).
     pub fn check(self, device: &wgpu::Device) -> Result<Self> {
         let limit = device.limits().max_compute_workgroup_storage_size;
