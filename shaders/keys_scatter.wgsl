@@ -31,12 +31,13 @@
 // Staged writes (the override STAGED_PAIRS = 2048, `SortWrites::Staged`; 1: direct writes, the
 // default): the tile is ranked in rounds of 2048 pairs (TILE_ITEMS / 8 of them), each by all 256
 // invocations, 8 pairs each, as above, with the tile's digit offsets carried from round to round
-// (`round_offsets`). A round's pairs go to workgroup memory in digit order, and after a barrier
-// invocation j writes staged pair j to its slot, so neighbouring invocations write neighbouring
-// slots of each digit's run: coalesced stores where the direct scatter has each invocation write a
-// run of its own (one memory sector per pair and invocation, which a GPU's cache merges only while
-// the output fits in it). The values stage in `digit_counts`, free once the round's ranks are
-// known.
+// (`round_offsets`). A round's keys are first read into workgroup memory by neighbouring
+// invocations (coalesced loads; each invocation then takes its run of 8 from there), its ranked
+// pairs go to workgroup memory in digit order, and after a barrier invocation j writes staged pair
+// j to its slot, so neighbouring invocations write neighbouring slots of each digit's run:
+// coalesced stores where the direct scatter has each invocation write a run of its own (one memory
+// sector per pair and invocation, which a GPU's cache merges only while the output fits in it). The
+// values stage in `digit_counts`, free once the round's ranks are known.
 // 11 KiB of workgroup memory, 27 KiB staged (`STAGED_WORKGROUP_BYTES`); no subgroup operations.
 // Tiles are linear workgroup indices over a 1D or 2D grid: wid.x + wid.y * num_workgroups.x.
 // Tile geometry, parameters and digit counting are shared with keys_histogram.wgsl
@@ -137,11 +138,32 @@ fn round_count(d: u32) -> u32 {
 // `staged_keys` and `digit_counts`. Counts the next pass's digits on the way.
 fn rank_round(lid: u32, first_item: u32, n: u32, gather_next: bool) {
     let first = first_item + lid * RUN_ITEMS;
+    // Staged: the round's keys are read into workgroup memory by neighbouring invocations
+    // (coalesced loads), then each invocation takes its own run of 8 from there.
+    var run_keys: array<vec2<u32>, 8>;
+    if STAGED_PAIRS > 1u {
+        for (var i = 0u; i < 8u; i++) {
+            let item = first_item + i * WORKGROUP + lid;
+            if item < n {
+                staged_keys[i * WORKGROUP + lid] = keys_in[item];
+            }
+        }
+        workgroupBarrier();
+        for (var i = 0u; i < 8u; i++) {
+            run_keys[i] = staged_keys[lid * 8u + i];
+        }
+    }
     var count = vec4<u32>(0u);
     for (var i = 0u; i < RUN_ITEMS; i++) {
         let item = first + i;
         if item < n {
-            count += one_hot(digit_of(keys_in[item]));
+            var key: vec2<u32>;
+            if STAGED_PAIRS > 1u {
+                key = run_keys[i];
+            } else {
+                key = keys_in[item];
+            }
+            count += one_hot(digit_of(key));
         }
     }
     store_digit_counts(count, lid);
@@ -189,7 +211,12 @@ fn rank_round(lid: u32, first_item: u32, n: u32, gather_next: bool) {
     for (var i = 0u; i < RUN_ITEMS; i++) {
         let item = first + i;
         if item < n {
-            let key = keys_in[item];
+            var key: vec2<u32>;
+            if STAGED_PAIRS > 1u {
+                key = run_keys[i];
+            } else {
+                key = keys_in[item];
+            }
             let d = digit_of(key);
             let q = d >> 2u;
             let slots = select(select(slots0, slots1, q == 1u), select(slots2, slots3, q == 3u), q >= 2u);
