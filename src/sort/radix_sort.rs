@@ -25,9 +25,9 @@
 //! (`Staged`, on devices whose workgroup memory holds the 27 KiB it takes): coalesced loads and
 //! stores instead of a memory sector per pair and invocation. Both give the same result. Staged
 //! writes are for GPUs, where scattered stores cost most once the output outgrows the cache (an
-//! H200 sorted 8.7M pairs at ~0.3 TB/s); not yet timed on one, so not the default (`bench --sort-
-//! writes`). On lavapipe they cost the sort 1.7-3.5x (loads and stores are scalar there either
-//! way).
+//! H200 sorted 8.7M pairs at ~0.3 TB/s); not yet timed on one, so not the default (`bench
+//! --sort-writes`). On lavapipe they cost the sort 1.7-3.5x (loads and stores are scalar there
+//! either way).
 //!
 //! Digit width: 4 bits, measured about 2.5x faster on the software driver (lavapipe, 2 cores,
 //! 1M pairs, 63-bit keys: about 0.14 s) than 8-bit digits ranked by workgroup-memory "ballots"
