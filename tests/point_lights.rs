@@ -1,7 +1,8 @@
 //! Point lights in the path tracer (next-event estimation with shadow rays): a floor under one
 //! light, seen straight from above with primary rays only, shows albedo · intensity · cos θ
 //! (through the tonemap) where the light is visible and black where an occluder shadows it;
-//! every path vertex traces exactly one shadow ray per light, and the rays are counted.
+//! every path vertex traces exactly one shadow ray per light, and the rays are counted (also in
+//! workgroups partly outside the image).
 
 mod common;
 
@@ -121,4 +122,32 @@ fn without_lights_the_floor_is_black_and_no_shadow_rays_are_traced() {
     let (image, rays) = render(&scene(Vec::new(), false));
     assert_eq!(rays, u64::from(SIZE * SIZE * SPP));
     assert!(image.pixels().all(|p| p[0] == 0), "no light, black sky");
+}
+
+/// Every ray is counted where the image's sides are not multiples of the 8x8 workgroups (the
+/// tally's last invocation of a workgroup half outside the image adds its rays too): without
+/// lights, one primary ray per path, hit or not.
+#[test]
+fn rays_are_counted_in_partial_workgroups() {
+    let scene = scene(Vec::new(), false);
+    let bvh = build_sweep_sah(&scene.triangles, &SahParams::default());
+    let geometry = Geometry::upload(gpu(), &scene).unwrap();
+    let tree = Tree::upload(gpu(), &bvh).unwrap();
+    for (width, height) in [(13, 7), (1, 1), (9, 17)] {
+        let settings = RenderSettings {
+            width,
+            height,
+            max_depth: 1,
+            ..RenderSettings::default()
+        };
+        let mut tracer = PathTracer::new(gpu(), settings).unwrap();
+        let stats = tracer
+            .trace(gpu(), &geometry, &tree, &scene.camera, scene.sky, 3)
+            .unwrap();
+        assert_eq!(
+            stats.rays,
+            u64::from(width * height * 3),
+            "{width}x{height}"
+        );
+    }
 }
