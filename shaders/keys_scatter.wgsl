@@ -132,6 +132,15 @@ fn round_count(d: u32) -> u32 {
     return (round_counts[d >> 1u] >> ((d & 1u) * 16u)) & 0xffffu;
 }
 
+// Key `i` of the invocation's run: staged, from `run_keys` (read there from workgroup memory);
+// direct, from `keys_in` at `item`.
+fn run_key(run_keys: ptr<function, array<vec2<u32>, 8>>, i: u32, item: u32) -> vec2<u32> {
+    if STAGED_PAIRS > 1u {
+        return (*run_keys)[i];
+    }
+    return keys_in[item];
+}
+
 // Ranks the round's pairs [first_item, first_item + 256 * RUN_ITEMS): the per-invocation digit
 // counts, their exclusive scan over invocations, then each pair's output slot (see the header);
 // the direct scatter writes each pair there, the staged one at its position in digit order in
@@ -157,13 +166,7 @@ fn rank_round(lid: u32, first_item: u32, n: u32, gather_next: bool) {
     for (var i = 0u; i < RUN_ITEMS; i++) {
         let item = first + i;
         if item < n {
-            var key: vec2<u32>;
-            if STAGED_PAIRS > 1u {
-                key = run_keys[i];
-            } else {
-                key = keys_in[item];
-            }
-            count += one_hot(digit_of(key));
+            count += one_hot(digit_of(run_key(&run_keys, i, item)));
         }
     }
     store_digit_counts(count, lid);
@@ -211,12 +214,7 @@ fn rank_round(lid: u32, first_item: u32, n: u32, gather_next: bool) {
     for (var i = 0u; i < RUN_ITEMS; i++) {
         let item = first + i;
         if item < n {
-            var key: vec2<u32>;
-            if STAGED_PAIRS > 1u {
-                key = run_keys[i];
-            } else {
-                key = keys_in[item];
-            }
+            let key = run_key(&run_keys, i, item);
             let d = digit_of(key);
             let q = d >> 2u;
             let slots = select(select(slots0, slots1, q == 1u), select(slots2, slots3, q == 3u), q >= 2u);
