@@ -59,9 +59,12 @@ impl TraceStats {
 
 /// Rays counted by one dispatch must fit the kernel's u32 counter.
 const MAX_RAYS_PER_DISPATCH: u64 = 1 << 31;
-/// Rays of one workgroup (8 x 8 pixels) in one dispatch must fit its tally's high 25 bits
-/// (`TALLY_SHIFT` in path_integrator.wgsl).
+/// Rays of one workgroup in one dispatch must fit its tally's high 25 bits (`TALLY_SHIFT` in
+/// path_integrator.wgsl).
 const MAX_WORKGROUP_RAYS: u64 = 1 << 25;
+/// Pixels (invocations) per workgroup of the trace kernels: 8 x 8 (`WORKGROUP_INVOCATIONS` in
+/// path_integrator.wgsl).
+const WORKGROUP_PIXELS: u64 = 64;
 /// Dispatches one trace records at most (each counts its rays in its own pair of counters).
 const MAX_DISPATCHES: u32 = 64;
 
@@ -161,13 +164,13 @@ impl PathTracer {
         let s = self.settings;
         // Each path vertex traces its bounce ray and one shadow ray per light.
         let rays_per_path = u64::from(s.max_depth) * (1 + u64::from(geometry.light_count));
-        let workgroup_rays_per_sample = 64 * rays_per_path;
+        let workgroup_rays_per_sample = WORKGROUP_PIXELS * rays_per_path;
         if workgroup_rays_per_sample >= MAX_WORKGROUP_RAYS {
             return Err(Error::InvalidArgument(format!(
                 "max depth {} with {} point lights: at most {} rays per path",
                 s.max_depth,
                 geometry.light_count,
-                (MAX_WORKGROUP_RAYS - 1) / 64
+                (MAX_WORKGROUP_RAYS - 1) / WORKGROUP_PIXELS
             )));
         }
         let rays_per_sample = u64::from(s.width) * u64::from(s.height) * rays_per_path;
