@@ -1,25 +1,17 @@
 // The diffuse path integrator of the path-tracing kernels (paths_trace.wgsl: binary BVH,
 // paths_trace_wide.wgsl: wide BVH), which declare the bindings and include their traversal
 // (`traverse`) before this file.
-// Diffuse path tracing: one invocation per pixel, `samples` paths per pixel per dispatch, each
-// with up to `max_depth` closest-hit rays (cosine-weighted bounces; emissive surfaces, a sky and
-// point lights as light). At every path vertex each point light is sampled with a shadow ray
-// (next-event estimation) and adds albedo · intensity · cos θ when visible, with no distance
-// falloff (the BART scenes' Whitted-style light convention, see `PointLight`). Radiance sums
-// accumulate progressively in `accum` (rgb sum, sample count in w). Every traced ray, bounce and
+// Diffuse path tracing: one invocation per pixel, `samples` paths per pixel per dispatch (traced
+// in one loop over all the pixel's rays, see `main`), each with up to `max_depth` closest-hit
+// rays (cosine-weighted bounces; emissive surfaces, a sky and point lights as light). At every
+// path vertex each point light is sampled with a shadow ray (next-event estimation) and adds
+// albedo · intensity · cos θ when visible, with no distance falloff (the BART scenes'
+// Whitted-style light convention, see `PointLight`). Radiance sums accumulate progressively in
+// `accum` (rgb sum, sample count in w). Every traced ray, bounce and
 // shadow, is counted: each invocation adds its rays to a workgroup tally, and the workgroup's last
 // invocation to finish adds the total to the dispatch's counter (one global atomic per workgroup,
 // no barrier).
 #include "random.wgsl"
-
-fn trace_closest(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_zero: u32, stack: ptr<function, TraversalStack>) -> TraceResult {
-    return traverse(origin, dir, t_min, t_max, opaque_zero, false, stack);
-}
-
-// Some hit in [t_min, t_max] (not necessarily the closest), or MISS.
-fn trace_any(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_zero: u32, stack: ptr<function, TraversalStack>) -> TraceResult {
-    return traverse(origin, dir, t_min, t_max, opaque_zero, true, stack);
-}
 
 struct TraceParams {
     eye: vec3<f32>,
@@ -79,6 +71,53 @@ fn cosine_direction(n: vec3<f32>, rng: ptr<function, u32>) -> vec3<f32> {
     return normalize(t * (r * cos(phi)) + bt * (r * sin(phi)) + n * sqrt(max(0.0, 1.0 - r2)));
 }
 
+// A path being traced: its next bounce ray (origin, dir), the bounce rays traced (`depth`), the
+// throughput and radiance so far, and its pending shadow ray: towards light `light` (none when
+// `light` = light_count) from `origin`, with the radiance it adds when nothing blocks it.
+struct PathState {
+    origin: vec3<f32>,
+    depth: u32,
+    dir: vec3<f32>,
+    light: u32,
+    throughput: vec3<f32>,
+    shadow_distance: f32,
+    radiance: vec3<f32>,
+    normal: vec3<f32>,
+    shadow_dir: vec3<f32>,
+    shadow_radiance: vec3<f32>,
+}
+
+// A new path of the pixel at `coords` from the camera (a jittered primary ray).
+fn start_path(coords: vec2<u32>, rng: ptr<function, u32>) -> PathState {
+    let jitter = vec2<f32>(random_f32(rng), random_f32(rng));
+    let ndc = vec2<f32>(
+        2.0 * (f32(coords.x) + jitter.x) / f32(params.width) - 1.0,
+        1.0 - 2.0 * (f32(coords.y) + jitter.y) / f32(params.height),
+    );
+    let dir = normalize(params.forward + ndc.x * params.right + ndc.y * params.up);
+    let zero = vec3<f32>(0.0);
+    return PathState(params.eye, 0u, dir, params.light_count, vec3<f32>(1.0), 0.0, zero, zero, zero, zero);
+}
+
+// The path's next shadow ray: towards the first light from `first` on that lies above the surface
+// at the path's vertex (next-event estimation), or none (`light` = light_count).
+fn next_shadow_ray(path: ptr<function, PathState>, first: u32) {
+    var l = first;
+    for (; l < params.light_count; l++) {
+        let light = lights[l];
+        let to_light = light.position - (*path).origin;
+        let distance = length(to_light);
+        let cos_theta = dot((*path).normal, to_light) / max(distance, 1e-30);
+        if cos_theta > 0.0 {
+            (*path).shadow_dir = to_light / distance;
+            (*path).shadow_distance = distance;
+            (*path).shadow_radiance = (*path).throughput * light.intensity * cos_theta;
+            break;
+        }
+    }
+    (*path).light = l;
+}
+
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     // The workgroup's 8x8 pixels, numbered so that every 8 consecutive invocations cover a 4x2
@@ -91,57 +130,64 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
     var overflows = 0u;
     // One traversal stack for all of this invocation's rays (zero-filled once).
     var stack: TraversalStack;
-    if coords.x < params.width && coords.y < params.height {
+    if coords.x < params.width && coords.y < params.height && params.samples != 0u {
         let pixel = coords.y * params.width + coords.x;
         var rng = pcg_hash(pixel ^ pcg_hash(params.seed));
         var sum = vec3<f32>(0.0);
-        for (var s = 0u; s < params.samples; s++) {
-            let jitter = vec2<f32>(random_f32(&rng), random_f32(&rng));
-            let ndc = vec2<f32>(
-                2.0 * (f32(coords.x) + jitter.x) / f32(params.width) - 1.0,
-                1.0 - 2.0 * (f32(coords.y) + jitter.y) / f32(params.height),
-            );
-            var origin = params.eye;
-            var dir = normalize(params.forward + ndc.x * params.right + ndc.y * params.up);
-            var throughput = vec3<f32>(1.0);
-            var radiance = vec3<f32>(0.0);
-            for (var depth = 0u; depth < params.max_depth; depth++) {
-                let traced = trace_closest(origin, dir, 0.0, 3.0e38, params.opaque_zero, &stack);
-                rays++;
-                overflows += traced.overflow;
-                let hit = traced.hit;
+        // One loop over all the invocation's rays, one traversal per iteration: a path that ends
+        // starts the pixel's next one at once, and shadow and bounce rays share the traversal,
+        // so the invocations of a SIMD batch (a warp) wait for each other only at the end of
+        // all their paths, not at the end of every path or ray kind.
+        var path = start_path(coords, &rng);
+        var samples_done = 0u;
+        loop {
+            let shadow = path.light < params.light_count;
+            let ray_dir = select(path.dir, path.shadow_dir, shadow);
+            let t_max = select(3.0e38, path.shadow_distance, shadow);
+            let traced = traverse(path.origin, ray_dir, 0.0, t_max, params.opaque_zero, shadow, &stack);
+            rays++;
+            overflows += traced.overflow;
+            let hit = traced.hit;
+            var ended = false;
+            if shadow {
                 if hit.tri == MISS {
-                    radiance += throughput * sky_radiance(dir);
+                    path.radiance += path.shadow_radiance;
+                }
+                next_shadow_ray(&path, path.light + 1u);
+                ended = path.light == params.light_count && path.depth == params.max_depth;
+            } else {
+                path.depth++;
+                if hit.tri == MISS {
+                    path.radiance += path.throughput * sky_radiance(path.dir);
+                    ended = true;
+                } else {
+                    let tri = load_triangle(hit.tri);
+                    let material = materials[tri.material];
+                    path.radiance += path.throughput * material.emission;
+                    path.throughput *= material.albedo;
+                    var n = normalize(cross(tri.v1 - tri.v0, tri.v2 - tri.v0));
+                    if dot(n, path.dir) > 0.0 {
+                        n = -n;
+                    }
+                    let p = path.origin + hit.t * path.dir;
+                    let eps = 1e-4 * max(1.0, max(abs(p.x), max(abs(p.y), abs(p.z))));
+                    path.origin = p + n * eps;
+                    path.normal = n;
+                    next_shadow_ray(&path, 0u);
+                    // Drawn now, used after the shadow rays: the pixel's random numbers are drawn
+                    // in the same order as a path at a time, ray by ray.
+                    path.dir = cosine_direction(n, &rng);
+                    ended = path.light == params.light_count && path.depth == params.max_depth;
+                }
+            }
+            if ended {
+                sum += path.radiance;
+                samples_done++;
+                if samples_done == params.samples {
                     break;
                 }
-                let tri = load_triangle(hit.tri);
-                let material = materials[tri.material];
-                radiance += throughput * material.emission;
-                throughput *= material.albedo;
-                var n = normalize(cross(tri.v1 - tri.v0, tri.v2 - tri.v0));
-                if dot(n, dir) > 0.0 {
-                    n = -n;
-                }
-                let p = origin + hit.t * dir;
-                let eps = 1e-4 * max(1.0, max(abs(p.x), max(abs(p.y), abs(p.z))));
-                origin = p + n * eps;
-                for (var l = 0u; l < params.light_count; l++) {
-                    let light = lights[l];
-                    let to_light = light.position - origin;
-                    let distance = length(to_light);
-                    let cos_theta = dot(n, to_light) / max(distance, 1e-30);
-                    if cos_theta > 0.0 {
-                        let shadow = trace_any(origin, to_light / distance, 0.0, distance, params.opaque_zero, &stack);
-                        rays++;
-                        overflows += shadow.overflow;
-                        if shadow.hit.tri == MISS {
-                            radiance += throughput * light.intensity * cos_theta;
-                        }
-                    }
-                }
-                dir = cosine_direction(n, &rng);
+                path = start_path(coords, &rng);
             }
-            sum += radiance;
         }
         accum[pixel] += vec4<f32>(sum, f32(params.samples));
     }
