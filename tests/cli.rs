@@ -25,6 +25,8 @@ fn bad_flags_are_clear_errors() {
     assert_clean_failure(&["bench", "--builder", "magic"], "unknown builder");
     assert_clean_failure(&["render", "--width", "0"], "must be positive");
     assert_clean_failure(&["render", "--max-leaf-size", "0"], "max-leaf-size");
+    assert_clean_failure(&["render", "--spp", "0"], "--spp");
+    assert_clean_failure(&["bench", "--spp", "0"], "--spp");
 }
 
 #[test]

@@ -57,8 +57,8 @@ pub struct TraceArgs {
     /// Image height in pixels
     #[arg(long, default_value_t = 480)]
     height: u32,
-    /// Samples (paths) per pixel
-    #[arg(long, default_value_t = 16)]
+    /// Samples (paths) per pixel (at least 1)
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..))]
     spp: u32,
     /// Maximum rays per path (1 = primary rays only)
     #[arg(long, default_value_t = 4)]
