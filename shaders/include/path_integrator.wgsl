@@ -7,10 +7,9 @@
 // path vertex each point light is sampled with a shadow ray (next-event estimation) and adds
 // albedo · intensity · cos θ when visible, with no distance falloff (the BART scenes'
 // Whitted-style light convention, see `PointLight`). Radiance sums accumulate progressively in
-// `accum` (rgb sum, sample count in w). Every traced ray, bounce and
-// shadow, is counted: each invocation adds its rays to a workgroup tally, and the workgroup's last
-// invocation to finish adds the total to the dispatch's counter (one global atomic per workgroup,
-// no barrier).
+// `accum` (rgb sum, sample count in w). Every traced ray, bounce and shadow, is counted: each
+// invocation adds its rays to a workgroup tally, and the workgroup's last invocation to finish
+// adds the total to the dispatch's counter (one global atomic per workgroup, no barrier).
 #include "random.wgsl"
 
 struct TraceParams {
@@ -72,19 +71,18 @@ fn cosine_direction(n: vec3<f32>, rng: ptr<function, u32>) -> vec3<f32> {
 }
 
 // A path being traced: its next bounce ray (origin, dir), the bounce rays traced (`depth`), the
-// throughput and radiance so far, and its pending shadow ray: towards light `light` (none when
-// `light` = light_count) from `origin`, with the radiance it adds when nothing blocks it.
+// throughput and radiance so far, the surface normal at its vertex, and the light of its pending
+// shadow ray (none when `light` = light_count). Only what the rays after a traversal need lives
+// here: a shadow ray's direction and contribution are recomputed from its light
+// (`light_sample`), so they take no registers across the traversal.
 struct PathState {
     origin: vec3<f32>,
     depth: u32,
     dir: vec3<f32>,
     light: u32,
     throughput: vec3<f32>,
-    shadow_distance: f32,
     radiance: vec3<f32>,
     normal: vec3<f32>,
-    shadow_dir: vec3<f32>,
-    shadow_radiance: vec3<f32>,
 }
 
 // A new path of the pixel at `coords` from the camera (a jittered primary ray).
@@ -96,24 +94,33 @@ fn start_path(coords: vec2<u32>, rng: ptr<function, u32>) -> PathState {
     );
     let dir = normalize(params.forward + ndc.x * params.right + ndc.y * params.up);
     let zero = vec3<f32>(0.0);
-    return PathState(params.eye, 0u, dir, params.light_count, vec3<f32>(1.0), 0.0, zero, zero, zero, zero);
+    return PathState(params.eye, 0u, dir, params.light_count, vec3<f32>(1.0), zero, zero);
+}
+
+// Point light `l` seen from the path's vertex: the shadow ray's direction and length, and the
+// radiance the light adds when nothing blocks it (next-event estimation; the light lies above
+// the surface when cos_theta > 0).
+struct LightSample {
+    dir: vec3<f32>,
+    distance: f32,
+    radiance: vec3<f32>,
+    cos_theta: f32,
+}
+
+fn light_sample(path: PathState, l: u32) -> LightSample {
+    let light = lights[l];
+    let to_light = light.position - path.origin;
+    let distance = length(to_light);
+    let cos_theta = dot(path.normal, to_light) / max(distance, 1e-30);
+    return LightSample(to_light / distance, distance, path.throughput * light.intensity * cos_theta, cos_theta);
 }
 
 // The path's next shadow ray: towards the first light from `first` on that lies above the surface
-// at the path's vertex (next-event estimation), or none (`light` = light_count).
+// at the path's vertex, or none (`light` = light_count).
 fn next_shadow_ray(path: ptr<function, PathState>, first: u32) {
     var l = first;
-    for (; l < params.light_count; l++) {
-        let light = lights[l];
-        let to_light = light.position - (*path).origin;
-        let distance = length(to_light);
-        let cos_theta = dot((*path).normal, to_light) / max(distance, 1e-30);
-        if cos_theta > 0.0 {
-            (*path).shadow_dir = to_light / distance;
-            (*path).shadow_distance = distance;
-            (*path).shadow_radiance = (*path).throughput * light.intensity * cos_theta;
-            break;
-        }
+    while l < params.light_count && light_sample(*path, l).cos_theta <= 0.0 {
+        l++;
     }
     (*path).light = l;
 }
@@ -142,8 +149,13 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
         var samples_done = 0u;
         loop {
             let shadow = path.light < params.light_count;
-            let ray_dir = select(path.dir, path.shadow_dir, shadow);
-            let t_max = select(3.0e38, path.shadow_distance, shadow);
+            var ray_dir = path.dir;
+            var t_max = 3.0e38;
+            if shadow {
+                let towards = light_sample(path, path.light);
+                ray_dir = towards.dir;
+                t_max = towards.distance;
+            }
             let traced = traverse(path.origin, ray_dir, 0.0, t_max, params.opaque_zero, shadow, &stack);
             rays++;
             overflows += traced.overflow;
@@ -151,7 +163,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
             var ended = false;
             if shadow {
                 if hit.tri == MISS {
-                    path.radiance += path.shadow_radiance;
+                    path.radiance += light_sample(path, path.light).radiance;
                 }
                 next_shadow_ray(&path, path.light + 1u);
                 ended = path.light == params.light_count && path.depth == params.max_depth;
