@@ -115,15 +115,18 @@ impl SortWrites {
         Ok(self)
     }
 
-    /// `direct` or `staged`, else a clear error.
+    pub const ALL: [SortWrites; 2] = [SortWrites::Direct, SortWrites::Staged];
+
+    /// The writes of that `name`, else a clear error.
     pub fn parse(name: &str) -> Result<Self> {
-        match name {
-            "direct" => Ok(Self::Direct),
-            "staged" => Ok(Self::Staged),
-            _ => Err(Error::InvalidArgument(format!(
-                "sort writes must be direct or staged, got '{name}'"
-            ))),
-        }
+        Self::ALL
+            .into_iter()
+            .find(|w| w.name() == name)
+            .ok_or_else(|| {
+                Error::InvalidArgument(format!(
+                    "sort writes must be direct or staged, got '{name}'"
+                ))
+            })
     }
 
     pub fn name(self) -> &'static str {
