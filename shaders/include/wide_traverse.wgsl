@@ -7,10 +7,8 @@
 // distance (a sorting network over keys of entry bits and child offset; one needs no sort) and
 // become a node group: child base, the offsets of the children in order (three bits each) with
 // their count, and the entry distance of the second child. The traversal descends into the nearest
-// child and keeps the rest as the current group, in registers (the paper's node group); the current
-// group goes on the stack only when a child hits internal children of its own (one stack entry per
-// wide level at most), so siblings visited one after another cost no stack traffic. A group whose
-// next child lies beyond the closest hit is dropped. The paper visits the internal children in
+// child and pushes the rest of the group (one stack entry per wide level at most). A popped group
+// whose next child lies beyond the closest hit is dropped. The paper visits the internal children in
 // octant order too; sorted, rays test far fewer triangles (README, "Traversal"). The including
 // kernel declares `wide_nodes` (as array<vec4<u32>>: a node is read as five 16-byte loads, not
 // eleven, one per field), `prim_indices` and `triangles`, and passes a zero from a uniform
@@ -138,11 +136,6 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_ze
     var overflow = 0u;
     var sp = 0u;
     var index = 0u;
-    // The node group being visited, kept out of the stack: (child base, the offsets of the
-    // children left, in order, three bits each, | their count << 24, entry of the second child
-    // of the group as found). A group goes on the stack only when a child of it has children
-    // to visit itself.
-    var group = vec3<u32>(0u);
     loop {
         let node = load_wide_node(index);
         let scale = vec3<f32>(
@@ -194,7 +187,26 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_ze
         let count = countOneBits(hit_inner);
         if count == 1u {
             index = node.child_base + countOneBits(imask & (hit_inner - 1u));
-        } else if count != 0u {
+            continue;
+        }
+        var group = vec3<u32>(0u);
+        if count == 0u {
+            // The first group on the stack whose next child can still hold a closer hit (its
+            // entry, rounded, may lie a little beyond one).
+            var found = false;
+            while sp > 0u {
+                sp--;
+                let popped = (*stack)[sp];
+                if bitcast<f32>(popped.z) <= best.t * BOX_EXIT_SLACK {
+                    group = popped;
+                    found = true;
+                    break;
+                }
+            }
+            if !found {
+                break;
+            }
+        } else {
             let inner_low = (vec4<u32>(hit_inner) & vec4<u32>(1u, 2u, 4u, 8u)) != vec4<u32>(0u);
             let inner_high = (vec4<u32>(hit_inner >> 4u) & vec4<u32>(1u, 2u, 4u, 8u)) != vec4<u32>(0u);
             let offsets_low = countOneBits(vec4<u32>(imask) & vec4<u32>(0u, 1u, 3u, 7u));
@@ -205,37 +217,20 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_ze
             );
             let order = (keys[0].x & 7u) | ((keys[0].y & 7u) << 3u) | ((keys[0].z & 7u) << 6u) | ((keys[0].w & 7u) << 9u)
                 | ((keys[1].x & 7u) << 12u) | ((keys[1].y & 7u) << 15u) | ((keys[1].z & 7u) << 18u) | ((keys[1].w & 7u) << 21u);
-            // Descend into the nearest child. Its siblings become the current group; the
-            // current group goes on the stack first if children remain in it.
-            index = node.child_base + (order & 7u);
-            if (group.y >> 24u) != 0u {
-                if sp < STACK_SIZE {
-                    (*stack)[sp] = group;
-                    sp++;
-                } else {
-                    overflow = 1u;
-                }
-            }
             // The second child's key without its low bits: its entry distance, rounded down.
-            group = vec3<u32>(node.child_base, (order >> 3u) | ((count - 1u) << 24u), keys[0].y & KEY_ENTRY);
-        } else {
-            // The next child of the current group, or of the first group on the stack, that can
-            // still hold a closer hit (its entry, rounded, may lie a little beyond one).
-            loop {
-                if (group.y >> 24u) != 0u && bitcast<f32>(group.z) <= best.t * BOX_EXIT_SLACK {
-                    break;
-                }
-                if sp == 0u {
-                    return TraceResult(best, overflow);
-                }
-                sp--;
-                group = (*stack)[sp];
+            group = vec3<u32>(node.child_base, order | (count << 24u), keys[0].y & KEY_ENTRY);
+        }
+        // Descend into the group's next child; the rest of the group goes on the stack.
+        index = group.x + (group.y & 7u);
+        let left = (group.y >> 24u) - 1u;
+        if left != 0u {
+            if sp < STACK_SIZE {
+                (*stack)[sp] = vec3<u32>(group.x, ((group.y & 0xffffffu) >> 3u) | (left << 24u), group.z);
+                sp++;
+            } else {
+                overflow = 1u;
             }
-            index = group.x + (group.y & 7u);
-            group.y = ((group.y & 0xffffffu) >> 3u) | (((group.y >> 24u) - 1u) << 24u);
         }
     }
-    // Not reached (the loop ends by returning), but naga's validator wants a function with a
-    // result to end in a return.
     return TraceResult(best, overflow);
 }
