@@ -246,28 +246,6 @@ fn bench_sort_tiles_build_the_same_trees() {
     assert!(stderr.contains("must be one of [8, 16, 32]"), "{stderr}");
 }
 
-/// `bench --sort-writes` sorts with the direct (the default) or the staged scatter, as the JSON
-/// says; both build the same trees, and other values are refused.
-#[test]
-fn bench_sort_writes_build_the_same_trees() {
-    let run = |writes: &str| quick_bench("lbvh,trbvh", &["--sort-writes", writes]);
-    let tree = |r: &serde_json::Value| (r["sah"].clone(), r["nodes"].clone(), r["valid"].clone());
-    let direct = run("direct");
-    for (record, default) in direct.iter().zip(&quick_bench("lbvh,trbvh", &[])) {
-        assert_eq!(record["sort_writes"], "direct");
-        assert_eq!(default["sort_writes"], "direct");
-        assert_eq!(tree(record), tree(default), "{record}");
-    }
-    for (record, reference) in run("staged").iter().zip(&direct) {
-        assert_eq!(record["sort_writes"], "staged");
-        assert_eq!(tree(record), tree(reference), "{record}");
-    }
-    let refused = treelet(&["bench", "--scene", "cornell", "--sort-writes", "scattered"]);
-    assert!(!refused.status.success());
-    let stderr = String::from_utf8_lossy(&refused.stderr);
-    assert!(stderr.contains("must be direct or staged"), "{stderr}");
-}
-
 /// `bench --climb-width` runs the bottom-up climbs at that workgroup width (the JSON says which
 /// ran); every width builds the same trees, and other values are refused.
 #[test]

@@ -6,7 +6,7 @@ mod common;
 use common::{gpu, rng};
 use rand::Rng;
 use treelet::gpu::{ItemCount, ParamSlab, Recorder};
-use treelet::sort::{sort_pairs_cpu, RadixSort, SortWrites, SORT_TILE_ITEMS};
+use treelet::sort::{sort_pairs_cpu, RadixSort, SORT_TILE_ITEMS};
 
 /// The largest tile: 256 invocations of 32 keys.
 const SORT_TILE: usize = 256 * 32;
@@ -99,47 +99,9 @@ fn two_dimensional_grids() {
 /// boundaries, many tiles, a 2D grid, odd pass counts; the GPU's choice by length is one of them.
 #[test]
 fn every_tile_size() {
-    every_tile_size_writing(SortWrites::Direct);
-    for n in [1000, 331_179, 1_100_000, 8_400_000] {
-        assert!(
-            SORT_TILE_ITEMS.contains(&treelet::sort::tile_items(n, wgpu::DeviceType::DiscreteGpu))
-        );
-    }
-    assert_eq!(
-        treelet::sort::tile_items(331_179, wgpu::DeviceType::Cpu),
-        32
-    );
-    assert!(RadixSort::new(gpu()).with_tile_items(12).is_err());
-}
-
-/// The staged scatter (pairs written out of workgroup memory, a round of 2048 at a time: 1, 2 or
-/// 4 rounds per tile) sorts exactly as the direct one, at every tile size and at lengths that
-/// end inside a round.
-#[test]
-fn staged_writes_at_every_tile_size() {
-    every_tile_size_writing(SortWrites::Staged);
-    let mut sorter = RadixSort::new(gpu())
-        .with_tile_items(32)
-        .unwrap()
-        .with_writes(gpu(), SortWrites::Staged)
-        .unwrap();
-    for (n, bits, seed) in [
-        (3 * 2048 + 17, 63, 90),
-        (2047, 32, 91),
-        (8192 + 2049, 44, 92),
-    ] {
-        check(&mut sorter, &random_keys(n, bits, seed), bits);
-    }
-}
-
-fn every_tile_size_writing(writes: SortWrites) {
     for items in SORT_TILE_ITEMS {
         let tile = 256 * items as usize;
-        let mut sorter = RadixSort::new(gpu())
-            .with_tile_items(items)
-            .unwrap()
-            .with_writes(gpu(), writes)
-            .unwrap();
+        let mut sorter = RadixSort::new(gpu()).with_tile_items(items).unwrap();
         for (n, bits, seed) in [
             (tile - 1, 32, 70),
             (tile, 20, 71),
@@ -155,11 +117,19 @@ fn every_tile_size_writing(writes: SortWrites) {
         let mut sorter = RadixSort::new(gpu())
             .with_max_workgroups_per_dimension(4)
             .with_tile_items(items)
-            .unwrap()
-            .with_writes(gpu(), writes)
             .unwrap();
         check(&mut sorter, &random_keys(9 * tile + 3, 24, 80), 24);
     }
+    for n in [1000, 331_179, 1_100_000, 8_400_000] {
+        assert!(
+            SORT_TILE_ITEMS.contains(&treelet::sort::tile_items(n, wgpu::DeviceType::DiscreteGpu))
+        );
+    }
+    assert_eq!(
+        treelet::sort::tile_items(331_179, wgpu::DeviceType::Cpu),
+        32
+    );
+    assert!(RadixSort::new(gpu()).with_tile_items(12).is_err());
 }
 
 #[test]
@@ -283,17 +253,11 @@ fn cpu_twin_matches_sort_unstable() {
 
 /// A pair count computed on the GPU (here written by a buffer copy in the same recording): the
 /// passes are sized for the capacity, the first `count` pairs end sorted and the pairs past them
-/// are left as they are; with direct and with staged writes (a count ending inside a round).
+/// are left as they are.
 #[test]
 fn a_count_on_the_gpu_sorts_only_its_pairs() {
-    for writes in [SortWrites::Direct, SortWrites::Staged] {
-        a_count_on_the_gpu_sorts_only_its_pairs_writing(writes);
-    }
-}
-
-fn a_count_on_the_gpu_sorts_only_its_pairs_writing(writes: SortWrites) {
     let ctx = gpu();
-    let mut sorter = RadixSort::new(ctx).with_writes(ctx, writes).unwrap();
+    let mut sorter = RadixSort::new(ctx);
     for (capacity, count, bits) in [(40_000usize, 29_999usize, 63), (9000, 8192, 32), (5, 2, 63)] {
         let keys = random_keys(capacity, bits, capacity as u64);
         let split_keys: Vec<[u32; 2]> = keys.iter().map(|&k| split(k)).collect();

@@ -18,7 +18,7 @@ use treelet::bvh::{
     sah_cost, validate, validate_with_references, write_bvh, write_wide_bvh, Builder,
 };
 use treelet::gpu::{aggregate_stages, check_climb_width, GpuContext, Spread, Timing, Warmup};
-use treelet::sort::{check_tile_items, SortWrites};
+use treelet::sort::check_tile_items;
 use treelet::trace::{PathTracer, TraceStats};
 use treelet::Result;
 
@@ -72,11 +72,6 @@ pub struct BenchArgs {
     /// keys; default: from the key count on GPUs, 32 on CPU devices). The trees are the same
     #[arg(long, value_parser = parse_sort_tile_items)]
     pub(super) sort_tile_items: Option<u32>,
-    /// How the radix sort's scatter writes its pairs: direct (each invocation its own; the
-    /// default) or staged (through workgroup memory, neighbouring invocations to neighbouring
-    /// slots). The trees are the same
-    #[arg(long, value_parser = parse_sort_writes)]
-    pub(super) sort_writes: Option<SortWrites>,
     /// Workgroup width of the bottom-up climbs (lbvh_climb, the first treelet round's
     /// nodes_level, nodes_refit): 8, 16, 32, 64, 128 or 256 (default: 64 on GPUs, 8 on CPU
     /// devices). The trees are the same
@@ -165,8 +160,6 @@ struct BenchRecord {
     treelet_dp: Option<&'static str>,
     /// The radix sort's keys per invocation asked for (null: chosen per sort).
     sort_tile_items: Option<u32>,
-    /// How the radix sort writes (`--sort-writes`, else direct).
-    sort_writes: &'static str,
     /// The climbs' workgroup width in effect.
     climb_width: u32,
     adapter: String,
@@ -224,11 +217,6 @@ struct BenchRecord {
 fn parse_sort_tile_items(value: &str) -> std::result::Result<u32, String> {
     let items = value.parse().map_err(|e| format!("{e}"))?;
     check_tile_items(items).map_err(|e| e.to_string())
-}
-
-/// `direct` or `staged`.
-fn parse_sort_writes(value: &str) -> std::result::Result<SortWrites, String> {
-    SortWrites::parse(value).map_err(|e| e.to_string())
 }
 
 /// A climb's workgroup width: one of `CLIMB_WIDTHS`.
@@ -373,7 +361,6 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
             team_below: builder.treelet_settings().map(|_| schedule.team_below()),
             treelet_dp: builder.treelet_settings().map(|_| schedule.dp().name()),
             sort_tile_items: gpu.sort_tile_items,
-            sort_writes: gpu.sort_writes.unwrap_or(SortWrites::Direct).name(),
             climb_width: gpu.climb_width(),
             adapter: gpu.adapter_description(),
             triangles: scene.triangles.len(),

@@ -287,23 +287,21 @@ fn parse_update_mode(name: &str) -> std::result::Result<treelet::bvh::UpdateMode
 
 pub fn run(cli: Cli) -> Result<()> {
     let adapter = cli.adapter.clone();
-    let gpu_with = |profile_dispatches, sort_tile_items, sort_writes, climb_width| {
+    let gpu_with = |profile_dispatches, sort_tile_items, climb_width| {
         GpuContext::new(&GpuOptions {
             adapter: adapter.clone(),
             profile_dispatches,
             sort_tile_items,
-            sort_writes,
             climb_width,
         })
     };
-    let gpu = || gpu_with(false, None, None, None);
+    let gpu = || gpu_with(false, None, None);
     match cli.command.unwrap_or_else(default_command) {
         Command::Render(args) => render::run(&gpu()?, &args),
         Command::Bench(args) => bench::run(
             &gpu_with(
                 args.profile_dispatches,
                 args.sort_tile_items,
-                args.sort_writes,
                 args.climb_width,
             )?,
             &args,

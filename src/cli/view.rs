@@ -45,7 +45,6 @@ pub fn run(adapter: Option<String>, args: ViewArgs) -> Result<()> {
             adapter,
             profile_dispatches: false,
             sort_tile_items: None,
-            sort_writes: None,
             climb_width: None,
         },
         window_size: (args.width, args.height),

@@ -7,7 +7,6 @@ use std::sync::Mutex;
 use wgpu::util::DeviceExt;
 
 use super::kernel::{compile, CompiledKernel, KernelInfo, Overrides, Slot};
-use crate::sort::SortWrites;
 use crate::{Error, Result};
 
 /// How to choose the adapter.
@@ -20,9 +19,6 @@ pub struct GpuOptions {
     /// Keys per invocation of every radix sort's tile (one of `sort::SORT_TILE_ITEMS`), instead of
     /// `sort::tile_items` of the length and device: for `bench` to compare them.
     pub sort_tile_items: Option<u32>,
-    /// How every radix sort writes its pairs instead of `sort::SortWrites::Direct`: for `bench`
-    /// to compare them.
-    pub sort_writes: Option<SortWrites>,
     /// Workgroup width of the bottom-up climbs (one of `gpu::CLIMB_WIDTHS`) instead of the
     /// device's default (`gpu::default_climb_width`): for `bench` to compare them, and for tests to
     /// run a GPU's width on a CPU device.
@@ -41,8 +37,6 @@ pub struct GpuContext {
     pub profile_dispatches: bool,
     /// `GpuOptions::sort_tile_items`.
     pub sort_tile_items: Option<u32>,
-    /// `GpuOptions::sort_writes`.
-    pub sort_writes: Option<SortWrites>,
     /// `GpuOptions::climb_width`.
     pub climb_width: Option<u32>,
     /// Kernels by (file, entry point, overridden constants with their values' bits), compiled
@@ -111,13 +105,9 @@ impl GpuContext {
         if let Some(width) = options.climb_width {
             super::kernel::check_climb_width(width)?;
         }
-        if let Some(writes) = options.sort_writes {
-            writes.check(&device)?;
-        }
         Ok(Self {
             profile_dispatches: options.profile_dispatches,
             sort_tile_items: options.sort_tile_items,
-            sort_writes: options.sort_writes,
             climb_width: options.climb_width,
             ..Self::from_device(adapter, device, queue)?
         })
@@ -178,7 +168,6 @@ impl GpuContext {
             timestamps,
             profile_dispatches: false,
             sort_tile_items: None,
-            sort_writes: None,
             climb_width: None,
             info,
             kernels: Mutex::default(),

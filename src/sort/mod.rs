@@ -17,6 +17,5 @@ pub use keys_histogram::KEYS_HISTOGRAM;
 pub use keys_scatter::KEYS_SCATTER;
 pub use prefix_scan::{scan_blocks, PrefixScan};
 pub use radix_sort::{
-    check_tile_items, sort_pairs_cpu, tile_items, RadixSort, SortWrites, RADIX_BITS,
-    SORT_TILE_ITEMS,
+    check_tile_items, sort_pairs_cpu, tile_items, RadixSort, RADIX_BITS, SORT_TILE_ITEMS,
 };

@@ -19,15 +19,11 @@
 //!    next pass would otherwise need. Three counts buffers rotate: pass p reads buffer p mod 3,
 //!    adds into p + 1 (zeroed by the dispatch before) and zeroes p + 2.
 //!
-//! Writes (`SortWrites`): each invocation scatters its own pairs (`Direct`, the default), or the
-//! tile is ranked in rounds of 2048 pairs whose pairs are staged in workgroup memory in digit order
-//! and written out by the whole workgroup, neighbouring invocations to neighbouring slots
-//! (`Staged`, on devices whose workgroup memory holds the 27 KiB it takes): coalesced loads and
-//! stores instead of a memory sector per pair and invocation. Both give the same result. Staged
-//! writes are for GPUs, where scattered stores cost most once the output outgrows the cache (an
-//! H200 sorted 8.7M pairs at ~0.3 TB/s); not yet timed on one, so not the default (`bench
-//! --sort-writes`). On lavapipe they cost the sort 1.7-3.5x (loads and stores are scalar there
-//! either way).
+//! Writes: each invocation scatters the pairs it ranked. Staged writes (a round of ranked pairs
+//! put in digit order in workgroup memory, then written by neighbouring invocations to
+//! neighbouring slots) were built and timed on an NVIDIA H200 and lost at every size (lbvh
+//! field:2000's sort 7.47 -> 9.45 ms, conference's 0.24 -> 0.33 ms; README, "On an NVIDIA H200,
+//! second session"), and 1.7-3.5x on lavapipe, so they were taken out.
 //!
 //! Digit width: 4 bits, measured about 2.5x faster on the software driver (lavapipe, 2 cores,
 //! 1M pairs, 63-bit keys: about 0.14 s) than 8-bit digits ranked by workgroup-memory "ballots"
@@ -82,58 +78,6 @@ pub fn tile_items(len: u32, device: wgpu::DeviceType) -> u32 {
             .into_iter()
             .find(|&items| len.div_ceil(SORT_WORKGROUP * items) <= GPU_TILES)
             .unwrap_or(SORT_TILE_ITEMS[2]),
-    }
-}
-
-/// How a scatter pass writes its pairs (`keys_scatter.wgsl`); the result is the same.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SortWrites {
-    /// Each invocation writes the pairs it ranked, a run of slots per digit of its own.
-    Direct,
-    /// A round of ranked pairs goes to workgroup memory in digit order, then every invocation
-    /// writes neighbouring slots.
-    Staged,
-}
-
-/// Workgroup memory a staged scatter declares (keys_scatter.wgsl's and radix_digits.wgsl's
-/// workgroup variables with STAGED_PAIRS = 2048: 16 KiB of them the staged keys).
-const STAGED_WORKGROUP_BYTES: u32 = 27_872;
-/// Pairs a staged scatter stages at once (`STAGED_PAIRS` in keys_scatter.wgsl).
-const STAGED_PAIRS: u32 = 2048;
-
-impl SortWrites {
-    /// `self` if `device` can run it, else a clear error (a staged scatter needs 27 KiB of
-    /// workgroup memory).
-    pub fn check(self, device: &wgpu::Device) -> Result<Self> {
-        let limit = device.limits().max_compute_workgroup_storage_size;
-        if self == Self::Staged && limit < STAGED_WORKGROUP_BYTES {
-            return Err(Error::InvalidArgument(format!(
-                "staged sort writes need {STAGED_WORKGROUP_BYTES} bytes of workgroup memory, this \
-                 device has {limit}"
-            )));
-        }
-        Ok(self)
-    }
-
-    pub const ALL: [SortWrites; 2] = [SortWrites::Direct, SortWrites::Staged];
-
-    /// The writes of that `name`, else a clear error.
-    pub fn parse(name: &str) -> Result<Self> {
-        Self::ALL
-            .into_iter()
-            .find(|w| w.name() == name)
-            .ok_or_else(|| {
-                Error::InvalidArgument(format!(
-                    "sort writes must be direct or staged, got '{name}'"
-                ))
-            })
-    }
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Direct => "direct",
-            Self::Staged => "staged",
-        }
     }
 }
 
@@ -203,50 +147,25 @@ impl Scratch {
     }
 }
 
-/// The kernels of one tile size (`SORT_TILE_ITEMS`, the WGSL override `TILE_ITEMS`); each
-/// scatter is compiled when first used.
+/// The kernels of one tile size (`SORT_TILE_ITEMS`, the WGSL override `TILE_ITEMS`).
 struct TileKernels {
-    variant: usize,
     histogram: Kernel<SortParams>,
-    direct_scatter: Option<Kernel<SortParams>>,
-    staged_scatter: Option<Kernel<SortParams>>,
+    scatter: Kernel<SortParams>,
 }
 
 impl TileKernels {
     /// The kernels of tile size `SORT_TILE_ITEMS[variant]`.
     fn new(ctx: &GpuContext, variant: usize) -> Self {
-        let tile = [tile_override(variant)];
         Self {
-            variant,
-            histogram: Kernel::with_overrides(ctx, &KEYS_HISTOGRAM, &tile),
-            direct_scatter: None,
-            staged_scatter: None,
+            histogram: Kernel::with_overrides(ctx, &KEYS_HISTOGRAM, &tile_override(variant)),
+            scatter: Kernel::with_overrides(ctx, &KEYS_SCATTER, &tile_override(variant)),
         }
-    }
-
-    /// The histogram, and the scatter that writes as `writes` says.
-    fn pair(
-        &mut self,
-        ctx: &GpuContext,
-        writes: SortWrites,
-    ) -> (&Kernel<SortParams>, &Kernel<SortParams>) {
-        let tile = tile_override(self.variant);
-        let scatter = match writes {
-            SortWrites::Direct => self
-                .direct_scatter
-                .get_or_insert_with(|| Kernel::with_overrides(ctx, &KEYS_SCATTER, &[tile])),
-            SortWrites::Staged => self.staged_scatter.get_or_insert_with(|| {
-                let staged = ("STAGED_PAIRS", f64::from(STAGED_PAIRS));
-                Kernel::with_overrides(ctx, &KEYS_SCATTER, &[tile, staged])
-            }),
-        };
-        (&self.histogram, scatter)
     }
 }
 
 /// The override of tile size `SORT_TILE_ITEMS[variant]`.
-fn tile_override(variant: usize) -> (&'static str, f64) {
-    ("TILE_ITEMS", f64::from(SORT_TILE_ITEMS[variant]))
+fn tile_override(variant: usize) -> [(&'static str, f64); 1] {
+    [("TILE_ITEMS", f64::from(SORT_TILE_ITEMS[variant]))]
 }
 
 /// The GPU radix sort: kernels created per tile size when first used, scratch buffers grown on
@@ -258,8 +177,6 @@ pub struct RadixSort {
     /// Keys per invocation of every sort (one of `SORT_TILE_ITEMS`); None: the context's
     /// `sort_tile_items`, else `tile_items` of the length and device.
     fixed_tile_items: Option<u32>,
-    /// How every sort writes; None: the context's `sort_writes`, else `SortWrites::Direct`.
-    fixed_writes: Option<SortWrites>,
     /// Parameters of the sorts `sort_pairs` records and submits itself.
     params: ParamSlab,
 }
@@ -274,7 +191,6 @@ impl RadixSort {
             scratch: None,
             max_workgroups_per_dimension: u32::MAX,
             fixed_tile_items: None,
-            fixed_writes: None,
             params: ParamSlab::new(ctx),
         }
     }
@@ -283,12 +199,6 @@ impl RadixSort {
     /// device (tests; the result is the same for every tile).
     pub fn with_tile_items(mut self, items: u32) -> Result<Self> {
         self.fixed_tile_items = Some(check_tile_items(items)?);
-        Ok(self)
-    }
-
-    /// Writes as `writes` says, if the device can (tests; the result is the same).
-    pub fn with_writes(mut self, ctx: &GpuContext, writes: SortWrites) -> Result<Self> {
-        self.fixed_writes = Some(writes.check(&ctx.device)?);
         Ok(self)
     }
 
@@ -354,13 +264,7 @@ impl RadixSort {
             .iter()
             .position(|&i| i == items)
             .expect("a tile size of SORT_TILE_ITEMS");
-        let writes = self
-            .fixed_writes
-            .or(ctx.sort_writes)
-            .unwrap_or(SortWrites::Direct);
-        let (histogram, scatter) = self.kernels[variant]
-            .get_or_insert_with(|| TileKernels::new(ctx, variant))
-            .pair(ctx, writes);
+        let kernels = &*self.kernels[variant].get_or_insert_with(|| TileKernels::new(ctx, variant));
         let num_tiles = len.div_ceil(SORT_WORKGROUP * items);
         let max = self
             .max_workgroups_per_dimension
@@ -379,7 +283,7 @@ impl RadixSort {
         let mut pass = rec.pass("sort");
         let counts = &scratch.counts;
         pass.dispatch(
-            histogram,
+            &kernels.histogram,
             tile_grid,
             &SortParams::pass(len, num_tiles, key_bits, 0),
             &[src.0, &counts[0], &counts[1], limit],
@@ -387,7 +291,7 @@ impl RadixSort {
         for p in 0..passes {
             let rotation = p as usize;
             pass.dispatch(
-                scatter,
+                &kernels.scatter,
                 tile_grid,
                 &SortParams::pass(len, num_tiles, key_bits, p),
                 &[
