@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Everything a lent GPU is asked to measure, in one `device` call that fits a short lease: the test
 # binaries, the round schedule sweep (levels dispatched, LEVELS; team threshold, TEAMS; the DP's
-# forms), build scaling (also with the radix sort's staged scatter), where a treelet level's time
+# forms), build scaling, where a treelet level's time
 # goes ("probe", when `bash scripts/gpu-probe.sh build` packed its variants), the changes of
 # scripts/variants/ beside this commit ("variants", when `bash scripts/gpu-variants.sh build` packed
 # them), the binary-vs-wide table, every dispatch of lbvh timed per sort tile and every dispatch of
@@ -9,8 +9,9 @@
 # so that the whole run ends within BUDGET seconds (default 500; STEPS picks some of the steps, e.g.
 # STEPS="tests schedules"). After every step the results so far are packed into $OUT/results.tar.gz,
 # so a call stopped at its limit still brings back what ran. A summary is printed last.
-# Here, first:   bash ../shared/gpu/pack.sh,   bash scripts/gpu-probe.sh build   and
-#   bash scripts/gpu-variants.sh build
+# Here, first:   bash ../shared/gpu/pack.sh,   bash scripts/gpu-probe.sh build,
+#   bash scripts/gpu-variants.sh build   and   bash scripts/gpu-extras.sh pack   (without the last,
+#   the binaries overrun the device tool's 64 MiB carry)
 # (optionally also a baseline binary: xz -c OLD/treelet > .gpu/base-treelet.xz, timed beside the
 # new one on the same GPU), then `run` with carry [".gpu", ".gl"], timeout_s 600 and the command:
 #   bash scripts/gpu-all.sh
@@ -45,6 +46,8 @@ step() {
   save
 }
 
+# The probe and variant binaries, when they came as one archive (scripts/gpu-extras.sh pack).
+bash scripts/gpu-extras.sh unpack
 # Unpack the binaries and scenes once (.gpu/run.sh with no mode), then run from there.
 OUT=$res bash .gpu/run.sh > $res/setup.txt 2>&1 || { cat $res/setup.txt; save; exit 1; }
 cat $res/setup.txt
@@ -68,10 +71,6 @@ scaling() {
   # scenes (lavapipe), with a third fewer levels in the chain but a DP three times as long.
   for s in conference field:707; do
     timeout 60 $TREELET bench --scene $s --builder trbvh --treelet-size 7,8 --rounds 2,3 $small >> $res/scaling.jsonl
-  done
-  # The radix sort's staged scatter beside the direct default (the sort's share grows with n).
-  for s in field:2000 field:707 conference; do
-    timeout 40 $TREELET bench --scene $s --builder lbvh,trbvh --sort-writes staged $small >> $res/scaling.jsonl
   done
   if [ -n "$base" ]; then
     for s in field:707 conference sibenik; do
@@ -125,8 +124,7 @@ for name in ("scaling.jsonl", "baseline.jsonl"):
         st = " ".join(f"{k} {v:.2f}" for k, v in (r.get("stages_ms") or {}).items() if v is not None)
         b = r.get("build_ms_spread") or {}
         preset = f"({r['treelet_size']},{r['rounds']})" if r.get("treelet_size") else ""
-        writes = r.get("sort_writes") or ""
-        print(f"  {os.path.basename(r['scene'])[:14]:14} {r['builder']:11} {preset:6} {writes:6} {r['triangles']:>9}"
+        print(f"  {os.path.basename(r['scene'])[:14]:14} {r['builder']:11} {preset:6} {r['triangles']:>9}"
               f" {b.get('min', 0):7.2f} {r['build_ms']:7.2f} {b.get('max', 0):7.2f}"
               f" {r.get('mtris_per_s') or 0:7.1f}  {st}  {r.get('sah') or 0:.4f}")
 PY
