@@ -4,8 +4,9 @@
 # forms), build scaling, where a treelet level's time
 # goes ("probe", when `bash scripts/gpu-probe.sh build` packed its variants), the changes of
 # scripts/variants/ beside this commit ("variants", when `bash scripts/gpu-variants.sh build` packed
-# them), the binary-vs-wide table, every dispatch of lbvh timed per sort tile and every dispatch of
-# trbvh and trbvh-split with the wide conversion timed ("kernels"), in that order, each step capped
+# them), the binary-vs-wide table ("layouts"), every dispatch of lbvh timed per sort tile and every dispatch of
+# trbvh and trbvh-split with the wide conversion timed ("kernels"); run as tests, layouts, variants,
+# schedules, scaling, probe, profile, kernels (the trace's correctness and the A/Bs first), each step capped
 # so that the whole run ends within BUDGET seconds (default 500; STEPS picks some of the steps, e.g.
 # STEPS="tests schedules"). After every step the results so far are packed into $OUT/results.tar.gz,
 # so a call stopped at its limit still brings back what ran. A summary is printed last.
@@ -87,17 +88,18 @@ tests() {
 }
 export -f tests
 step tests 150 bash -c tests
+# The trace first: both layouts on every scene (their ray counts must agree), then the variants.
+step layouts 80 env SCENES="conference crytek_sponza sibenik lost_empire armadillo" OPTIMAL_SCENES="conference lost_empire" \
+  REPEATS=11 bash scripts/gpu-layouts.sh
+if ls .gpu/variant-*.xz > /dev/null 2>&1; then
+  step variants 150 env TREELET=$TREELET bash scripts/gpu-variants.sh run
+fi
 step schedules 150 env SCENES="${SCHEDULE_SCENES:-conference crytek_sponza sibenik lost_empire field:224 field:707 field:2000}" \
   LEVELS="${LEVELS:-10,12,14,16,18,20}" TEAMS="${TEAMS:-0}" CLIMBS=" " REPEATS=11 bash scripts/gpu-schedules.sh
 step scaling 100 bash -c scaling
 if ls .gpu/probe-*.xz > /dev/null 2>&1; then
   step probe 40 env SCENES="conference" REPEATS=5 TREELET=$TREELET bash scripts/gpu-probe.sh run
 fi
-if ls .gpu/variant-*.xz > /dev/null 2>&1; then
-  step variants 150 env TREELET=$TREELET bash scripts/gpu-variants.sh run
-fi
-step layouts 80 env SCENES="conference crytek_sponza sibenik lost_empire armadillo" OPTIMAL_SCENES="conference lost_empire" \
-  REPEATS=11 bash scripts/gpu-layouts.sh
 step profile 60 env SCENES="conference field:707 field:2000" TILES="default 8 16 32" BUILDERS=lbvh \
   REPEATS=5 bash scripts/gpu-profile.sh
 # Every kernel of the treelet builds, pre-splitting, the collapse and the wide conversion included.
