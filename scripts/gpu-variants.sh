@@ -74,7 +74,7 @@ run)
   python3 - "$out/variants.jsonl" <<'PY'
 import json, statistics, sys
 rows = [json.loads(l) for l in open(sys.argv[1]) if l.startswith("{")]
-print("variant          scene            builder      layout  binary           build ms  Mrays/s   sah")
+print("variant          scene            builder      layout  binary           build ms  Mrays/s        rays   sah")
 keys = dict.fromkeys((r["variant"], r["scene"], r["builder"], r["layout"]) for r in rows)
 for v, s, b, l in keys:
     for tag in ("main", v):
@@ -82,8 +82,8 @@ for v, s, b, l in keys:
         if not g:
             continue
         build = statistics.median(r["build_ms"] for r in g)
-        rays = statistics.median(r.get("mrays_per_s") or 0 for r in g)
-        print(f"{v[:16]:16} {s[-16:]:16} {b:12} {l:7} {tag[:16]:16} {build:8.3f} {rays:8.1f}  {g[0]['sah']:.4f}")
+        mrays = statistics.median(r.get("mrays_per_s") or 0 for r in g)
+        print(f"{v[:16]:16} {s[-16:]:16} {b:12} {l:7} {tag[:16]:16} {build:8.3f} {mrays:8.1f} {g[0].get('rays') or 0:11}  {g[0]['sah']:.4f}")
 PY
   ;;
 *)
