@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
-# Everything a lent GPU is asked to measure, in one `device` call that fits a short lease: the test
-# binaries, the round schedule sweep (levels dispatched, LEVELS; team threshold, TEAMS; the DP's
-# forms), build scaling, where a treelet level's time
-# goes ("probe", when `bash scripts/gpu-probe.sh build` packed its variants), the changes of
-# scripts/variants/ beside this commit ("variants", when `bash scripts/gpu-variants.sh build` packed
-# them), the binary-vs-wide table ("layouts"), every dispatch of lbvh timed per sort tile and every dispatch of
-# trbvh and trbvh-split with the wide conversion timed ("kernels"); run as tests, layouts, variants,
-# schedules, scaling, probe, profile, kernels (the trace's correctness and the A/Bs first), each step capped
+# Everything a lent GPU is asked to measure, in one `device` call that fits a short lease, step by
+# step in this order (the trace's correctness and the A/Bs first): the test binaries ("tests"), the
+# binary-vs-wide table ("layouts"), the changes of scripts/variants/ beside this commit
+# ("variants", when `bash scripts/gpu-variants.sh build` packed them), the round schedule sweep
+# (levels dispatched, LEVELS; team threshold, TEAMS; the DP's forms: "schedules"), build scaling
+# ("scaling"), where a treelet level's time goes ("probe", when `bash scripts/gpu-probe.sh build`
+# packed its variants), every dispatch of lbvh timed per sort tile ("profile") and every dispatch
+# of trbvh and trbvh-split with the wide conversion timed ("kernels"). Each step is capped
 # so that the whole run ends within BUDGET seconds (default 500; STEPS picks some of the steps, e.g.
 # STEPS="tests schedules"). After every step the results so far are packed into $OUT/results.tar.gz,
 # so a call stopped at its limit still brings back what ran. A summary is printed last.

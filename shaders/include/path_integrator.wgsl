@@ -7,10 +7,9 @@
 // path vertex each point light is sampled with a shadow ray (next-event estimation) and adds
 // albedo · intensity · cos θ when visible, with no distance falloff (the BART scenes'
 // Whitted-style light convention, see `PointLight`). Radiance sums accumulate progressively in
-// `accum` (rgb sum, sample count in w). Every traced ray, bounce and
-// shadow, is counted: each invocation adds its rays to a workgroup tally, and the workgroup's last
-// invocation to finish adds the total to the dispatch's counter (one global atomic per workgroup,
-// no barrier).
+// `accum` (rgb sum, sample count in w). Every traced ray, bounce and shadow, is counted: each
+// invocation adds its rays to a workgroup tally, and the workgroup's last invocation to finish
+// adds the total to the dispatch's counter (one global atomic per workgroup, no barrier).
 #include "random.wgsl"
 
 struct TraceParams {
