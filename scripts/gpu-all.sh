@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Everything a lent GPU is asked to measure, in one `device` call that fits a short lease, step by
 # step in this order (the trace's correctness and the A/Bs first): the test binaries ("tests"), the
-# binary-vs-wide table ("layouts"), the changes of scripts/variants/ beside this commit
-# ("variants", when `bash scripts/gpu-variants.sh build` packed them), the round schedule sweep
-# (levels dispatched, LEVELS; team threshold, TEAMS; the DP's forms: "schedules"), build scaling
+# binary-vs-wide table ("layouts"), the round schedules (the DP's forms in the dispatched levels
+# and the climb, the team threshold TEAMS, and levels dispatched where LEVELS is set:
+# "schedules"), the changes of scripts/variants/ beside this commit ("variants", when
+# `bash scripts/gpu-variants.sh build` packed them), build scaling
 # ("scaling"), where a treelet level's time goes ("probe", when `bash scripts/gpu-probe.sh build`
 # packed its variants), every dispatch of lbvh timed per sort tile ("profile") and every dispatch
 # of trbvh and trbvh-split with the wide conversion timed ("kernels"). Each step is capped
@@ -91,11 +92,14 @@ step tests 150 bash -c tests
 # The trace first: both layouts on every scene (their ray counts must agree), then the variants.
 step layouts 80 env SCENES="conference crytek_sponza sibenik lost_empire armadillo" OPTIMAL_SCENES="conference lost_empire" \
   REPEATS=11 bash scripts/gpu-layouts.sh
+# The DP's forms (dispatched levels and climb) and teams on real builds, before the variants: the
+# question the last GPU left open (README, "On an NVIDIA H200, second session"). LEVELS adds the
+# sweep of levels dispatched.
+step schedules 150 env SCENES="${SCHEDULE_SCENES:-conference crytek_sponza sibenik field:707 field:2000}" \
+  LEVELS="${LEVELS:-}" TEAMS="${TEAMS:-32,256}" CLIMBS=" " REPEATS=11 bash scripts/gpu-schedules.sh
 if ls .gpu/variant-*.xz > /dev/null 2>&1; then
   step variants 150 env TREELET=$TREELET bash scripts/gpu-variants.sh run
 fi
-step schedules 150 env SCENES="${SCHEDULE_SCENES:-conference crytek_sponza sibenik lost_empire field:224 field:707 field:2000}" \
-  LEVELS="${LEVELS:-10,12,14,16,18,20}" TEAMS="${TEAMS:-0}" CLIMBS=" " REPEATS=11 bash scripts/gpu-schedules.sh
 step scaling 100 bash -c scaling
 if ls .gpu/probe-*.xz > /dev/null 2>&1; then
   step probe 40 env SCENES="conference" REPEATS=5 TREELET=$TREELET bash scripts/gpu-probe.sh run

@@ -211,19 +211,41 @@ fn bench_compares_round_schedules_on_the_same_tree() {
     }
 }
 
-/// `bench --treelet-dp unrolled,loop` measures trbvh once per DP form and reports it; both build
-/// the same tree.
+/// `bench --treelet-dp unrolled,loop --climb-dp ...` measures trbvh once per pair of DP forms
+/// (dispatched levels, climb) and reports it; all build the same tree.
 #[test]
 fn bench_compares_dp_forms_on_the_same_tree() {
-    let records = quick_bench("trbvh", &["--treelet-dp", "unrolled,loop"]);
+    let records = quick_bench(
+        "trbvh",
+        &[
+            "--treelet-dp",
+            "unrolled,loop",
+            "--climb-dp",
+            "loop,unrolled",
+        ],
+    );
     let forms: Vec<_> = records
         .iter()
-        .map(|r| r["treelet_dp"].as_str().unwrap().to_owned())
+        .map(|r| {
+            let form = |key: &str| r[key].as_str().unwrap().to_owned();
+            (form("treelet_dp"), form("climb_dp"))
+        })
         .collect();
-    assert_eq!(forms, ["unrolled", "loop"]);
-    assert_eq!(records[1]["valid"], true);
-    assert_eq!(records[1]["sah"], records[0]["sah"]);
-    assert_eq!(records[1]["nodes"], records[0]["nodes"]);
+    let pair = |a: &str, b: &str| (a.to_owned(), b.to_owned());
+    assert_eq!(
+        forms,
+        [
+            pair("unrolled", "loop"),
+            pair("unrolled", "unrolled"),
+            pair("loop", "loop"),
+            pair("loop", "unrolled"),
+        ]
+    );
+    for record in &records[1..] {
+        assert_eq!(record["valid"], true);
+        assert_eq!(record["sah"], records[0]["sah"]);
+        assert_eq!(record["nodes"], records[0]["nodes"]);
+    }
 }
 
 /// `bench --sort-tile-items` sorts in tiles of 2048, 4096 or 8192 keys; every tile builds the
@@ -453,7 +475,7 @@ fn overflowing_triangles_are_reported_as_such() {
 
 #[test]
 fn options_of_other_builders_are_refused() {
-    let cases: [(&[&str], &str); 7] = [
+    let cases: [(&[&str], &str); 8] = [
         (
             &["render", "--builder", "sweep", "--treelet-size", "99"],
             "--treelet-size does not apply to builder sweep",
@@ -477,6 +499,10 @@ fn options_of_other_builders_are_refused() {
         (
             &["bench", "--builder", "trbvh", "--treelet-dp", "recursive"],
             "invalid value 'recursive' for '--treelet-dp",
+        ),
+        (
+            &["bench", "--builder", "sweep", "--climb-dp", "loop"],
+            "--climb-dp does not apply to builder sweep",
         ),
         (
             &["bench", "--builder", "trbvh", "--split-budget", "0.3"],

@@ -431,26 +431,30 @@ fn teams_lone_invocations_and_dp_forms_build_the_same_tree() {
         };
         builder.settings = settings;
         for levels in [None, Some(0)] {
-            // The loop form with the default schedule only (it dispatches the low levels and
-            // climbs the top ones): on lavapipe, climbing every level with it takes minutes.
-            let mut variants = vec![(0, TreeletDp::Unrolled), (u32::MAX, TreeletDp::Unrolled)];
+            // (team threshold, DP form of the dispatched levels, of the climb). The loop form
+            // with the default schedule only (it dispatches the low levels and climbs the top
+            // ones): on lavapipe, climbing every level with it takes minutes.
+            let unrolled = TreeletDp::Unrolled;
+            let mut variants = vec![(0, unrolled, unrolled), (u32::MAX, unrolled, unrolled)];
             if levels.is_none() {
-                variants.push((0, TreeletDp::Loop));
+                variants.push((0, TreeletDp::Loop, TreeletDp::Loop));
+                variants.push((0, unrolled, TreeletDp::Loop));
             }
             let mut trees = Vec::new();
-            for &(below, dp) in &variants {
+            for &(below, dp, climb_dp) in &variants {
                 builder.set_schedule(RoundSchedule {
                     level_dispatches: levels,
                     team_below: Some(below),
                     dp: Some(dp),
+                    climb_dp: Some(climb_dp),
                 });
                 trees.push(builder.build_stages(gpu(), &geometry).unwrap());
             }
-            for (tree, (below, dp)) in trees.iter().zip(&variants).skip(1) {
+            for (tree, variant) in trees.iter().zip(&variants).skip(1) {
                 assert!(
                     tree.working == trees[0].working,
-                    "treelet size {treelet_size}, level dispatches {levels:?}: teams below \
-                     {below} with the DP {dp:?} differ from lone invocations, DP written out"
+                    "treelet size {treelet_size}, level dispatches {levels:?}: (teams below, DP, \
+                     climb DP) {variant:?} differ from lone invocations, DP written out"
                 );
             }
             let model = CostModel::from(&builder.sah);

@@ -64,6 +64,10 @@ pub struct BenchArgs {
     /// tree is the same for both
     #[arg(long, value_delimiter = ',', value_enum)]
     treelet_dp: Vec<DpForm>,
+    /// The same for the climbed top levels only, whose waves hold a few treelets each (default:
+    /// as --treelet-dp); a comma-separated list to compare. The tree is the same for both
+    #[arg(long, value_delimiter = ',', value_enum)]
+    climb_dp: Vec<DpForm>,
     /// Time every dispatch on its own (each in a compute pass of its own, which may cost a little
     /// more than the passes of a normal build) and list them in `dispatch_ms`
     #[arg(long)]
@@ -105,17 +109,21 @@ impl BenchArgs {
                 ("--level-dispatches", !self.level_dispatches.is_empty()),
                 ("--team-below", !self.team_below.is_empty()),
                 ("--treelet-dp", !self.treelet_dp.is_empty()),
+                ("--climb-dp", !self.climb_dp.is_empty()),
             ],
         )?;
         let mut schedules = Vec::new();
         for level_dispatches in or_default(&self.level_dispatches) {
             for team_below in or_default(&self.team_below) {
                 for dp in or_default(&self.treelet_dp) {
-                    schedules.push(RoundSchedule {
-                        level_dispatches,
-                        team_below,
-                        dp: dp.map(TreeletDp::from),
-                    });
+                    for climb_dp in or_default(&self.climb_dp) {
+                        schedules.push(RoundSchedule {
+                            level_dispatches,
+                            team_below,
+                            dp: dp.map(TreeletDp::from),
+                            climb_dp: climb_dp.map(TreeletDp::from),
+                        });
+                    }
                 }
             }
         }
@@ -156,8 +164,10 @@ struct BenchRecord {
     /// round) and the team threshold in effect.
     level_dispatches: Option<u32>,
     team_below: Option<u32>,
-    /// Treelet builders: the lone invocation's DP form in effect (`--treelet-dp`).
+    /// Treelet builders: the lone invocation's DP form in effect in the dispatched levels
+    /// (`--treelet-dp`) and in the climb (`--climb-dp`).
     treelet_dp: Option<&'static str>,
+    climb_dp: Option<&'static str>,
     /// The radix sort's keys per invocation asked for (null: chosen per sort).
     sort_tile_items: Option<u32>,
     /// The climbs' workgroup width in effect.
@@ -360,6 +370,9 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
             level_dispatches: schedule.level_dispatches,
             team_below: builder.treelet_settings().map(|_| schedule.team_below()),
             treelet_dp: builder.treelet_settings().map(|_| schedule.dp().name()),
+            climb_dp: builder
+                .treelet_settings()
+                .map(|_| schedule.climb_dp().name()),
             sort_tile_items: gpu.sort_tile_items,
             climb_width: gpu.climb_width(),
             adapter: gpu.adapter_description(),
@@ -425,6 +438,9 @@ fn run_label(
     }
     if let Some(dp) = schedule.dp {
         label += &format!(" dp={}", dp.name());
+    }
+    if let Some(dp) = schedule.climb_dp {
+        label += &format!(" climb-dp={}", dp.name());
     }
     match layout {
         Layout::Binary => format!("{label} binary"),

@@ -19,7 +19,8 @@
 //! neither on lavapipe nor on an H200. Both find the same topology (same operations, same
 //! tie-breaking). The treelet size is a pipeline constant: the treelet kernels are compiled per
 //! size when first used, the lone DP written out for it (`dp_unrolled`), or as loops on request
-//! (`RoundSchedule::dp`, for GPUs to compare; the same tree).
+//! (`RoundSchedule::dp` for the dispatched levels, `RoundSchedule::climb_dp` for the climb, for
+//! GPUs to compare; the same tree).
 
 use std::sync::OnceLock;
 
@@ -32,7 +33,8 @@ use super::treelets_climb::TREELETS_CLIMB;
 use super::treelets_optimize::TREELETS_OPTIMIZE;
 use crate::gpu::constants::{MAX_LEVEL_DISPATCHES, MAX_TREELET_SIZE, MIN_TREELET_SIZE};
 use crate::gpu::{
-    storage_buffer, storage_buffer_zeroed, GpuContext, Grid, ItemCount, Kernel, Recorder,
+    storage_buffer, storage_buffer_zeroed, GpuContext, Grid, ItemCount, Kernel, KernelDecl,
+    Recorder,
 };
 use crate::Result;
 
@@ -157,8 +159,12 @@ pub struct RoundSchedule {
     /// for every level and every climbed wave of fewer than 32 treelets. None:
     /// `DEFAULT_TEAM_BELOW` (never).
     pub team_below: Option<u32>,
-    /// How a lone invocation's DP is written (`TreeletDp`); None: written out.
+    /// How a lone invocation's DP is written (`TreeletDp`) in the dispatched levels; None:
+    /// written out.
     pub dp: Option<TreeletDp>,
+    /// How it is written in the climb (`treelets_climb`: the top levels, a few treelets per
+    /// wave, where one treelet's latency is the wave's); None: as in the dispatched levels.
+    pub climb_dp: Option<TreeletDp>,
 }
 
 impl RoundSchedule {
@@ -167,9 +173,14 @@ impl RoundSchedule {
         self.team_below.unwrap_or(DEFAULT_TEAM_BELOW)
     }
 
-    /// The DP form in effect.
+    /// The DP form in effect in the dispatched levels.
     pub fn dp(&self) -> TreeletDp {
         self.dp.unwrap_or_default()
+    }
+
+    /// The DP form in effect in the climb.
+    pub fn climb_dp(&self) -> TreeletDp {
+        self.climb_dp.unwrap_or_else(|| self.dp())
     }
 }
 
@@ -184,23 +195,30 @@ const DEFAULT_TEAM_BELOW: u32 = 0;
 /// Treelet sizes with kernels of their own, MIN_TREELET_SIZE..=MAX_TREELET_SIZE.
 const TREELET_SIZES: usize = (MAX_TREELET_SIZE - MIN_TREELET_SIZE + 1) as usize;
 
-/// The treelet kernels of one treelet size and DP form (the WGSL overrides `TREELET_SIZE` and
-/// `TREELET_DP_LOOP`, which select the generated DP: `dp_unrolled`).
+/// Treelet kernels compiled when first used, one per treelet size from MIN_TREELET_SIZE and DP
+/// form (`dp as usize`): the WGSL overrides `TREELET_SIZE` and `TREELET_DP_LOOP` select the
+/// generated DP (`dp_unrolled`).
 struct TreeletKernels {
-    optimize: Kernel<RoundParams>,
-    climb: Kernel<RoundParams>,
+    decl: &'static KernelDecl<RoundParams>,
+    compiled: [[OnceLock<Kernel<RoundParams>>; TreeletDp::FORMS]; TREELET_SIZES],
 }
 
 impl TreeletKernels {
-    fn new(ctx: &GpuContext, treelet_size: u32, dp: TreeletDp) -> Self {
-        let overrides = &[
-            (TREELET_SIZE_OVERRIDE, f64::from(treelet_size)),
-            (TREELET_DP_LOOP_OVERRIDE, dp.override_value()),
-        ];
+    fn new(decl: &'static KernelDecl<RoundParams>) -> Self {
         Self {
-            optimize: Kernel::with_overrides(ctx, &TREELETS_OPTIMIZE, overrides),
-            climb: Kernel::with_overrides(ctx, &TREELETS_CLIMB, overrides),
+            decl,
+            compiled: Default::default(),
         }
+    }
+
+    fn get(&self, ctx: &GpuContext, treelet_size: u32, dp: TreeletDp) -> &Kernel<RoundParams> {
+        self.compiled[(treelet_size - MIN_TREELET_SIZE) as usize][dp as usize].get_or_init(|| {
+            let overrides = &[
+                (TREELET_SIZE_OVERRIDE, f64::from(treelet_size)),
+                (TREELET_DP_LOOP_OVERRIDE, dp.override_value()),
+            ];
+            Kernel::with_overrides(ctx, self.decl, overrides)
+        })
     }
 }
 
@@ -211,9 +229,9 @@ pub(crate) struct TreeletRounds {
     /// the declared width).
     climb_level: Kernel<RoundParams>,
     level: Kernel<RoundParams>,
-    /// Per treelet size from MIN_TREELET_SIZE and DP form (`dp as usize`), compiled when first
-    /// used.
-    treelet_kernels: [[OnceLock<TreeletKernels>; TreeletDp::FORMS]; TREELET_SIZES],
+    /// `treelets_optimize` and `treelets_climb` per treelet size and DP form.
+    optimize: TreeletKernels,
+    climb: TreeletKernels,
     /// `subsets_by_size`, read by the teams.
     subsets: wgpu::Buffer,
     /// The roots of the dispatched levels and the first climbed one, each level in its slots
@@ -227,7 +245,8 @@ impl TreeletRounds {
         Ok(Self {
             climb_level: Kernel::climb(ctx, &NODES_LEVEL),
             level: Kernel::new(ctx, &NODES_LEVEL),
-            treelet_kernels: Default::default(),
+            optimize: TreeletKernels::new(&TREELETS_OPTIMIZE),
+            climb: TreeletKernels::new(&TREELETS_CLIMB),
             subsets: storage_buffer(ctx, "treelet subsets by size", &subsets_by_size())?,
             roots: None,
             schedule: RoundSchedule::default(),
@@ -328,10 +347,9 @@ impl TreeletRounds {
         if round.gamma == u32::MAX {
             return;
         }
-        let dp = self.schedule.dp();
-        let kernels = self.treelet_kernels[(round.treelet_size - MIN_TREELET_SIZE) as usize]
-            [dp as usize]
-            .get_or_init(|| TreeletKernels::new(ctx, round.treelet_size, dp));
+        let optimize = self
+            .optimize
+            .get(ctx, round.treelet_size, self.schedule.dp());
         let treelet_buffers = [
             state.nodes,
             state.parents,
@@ -348,25 +366,18 @@ impl TreeletRounds {
             params.level = level;
             params.level_first = first_slot(level);
             let args = 4 * (SCHEDULE_ARGS + 3 * u64::from(level - 1));
-            pass.dispatch_indirect(
-                &kernels.optimize,
-                state.schedule,
-                args,
-                &params,
-                &treelet_buffers,
-            );
+            pass.dispatch_indirect(optimize, state.schedule, args, &params, &treelet_buffers);
         }
         drop(pass);
         params.level = dispatched + 1;
         params.level_first = first_slot(dispatched + 1);
         let mut climb_buffers = treelet_buffers.to_vec();
         climb_buffers.extend([state.levels, state.arrivals, state.waves]);
-        rec.pass("treelets climb").dispatch(
-            &kernels.climb,
-            Grid::workgroups(1, 1),
-            &params,
-            &climb_buffers,
-        );
+        let climb = self
+            .climb
+            .get(ctx, round.treelet_size, self.schedule.climb_dp());
+        rec.pass("treelets climb")
+            .dispatch(climb, Grid::workgroups(1, 1), &params, &climb_buffers);
     }
 }
 
