@@ -106,6 +106,10 @@ fn with_byte(bytes: vec2<u32>, slot: u32, value: u32) -> vec2<u32> {
     return bytes | select(vec2<u32>(shifted, 0u), vec2<u32>(0u, shifted), slot >= 4u);
 }
 
+// Below every score: a (child, slot) pair scores more than this to be taken (the CPU twin's
+// start).
+const NO_SCORE: f32 = -3.4e38;
+
 // A wide node before its children and references are allocated: the node (child_base and
 // prim_base 0), its internal children and references, and per slot the binary child's index
 // (internal) or first reference (leaf).
@@ -195,38 +199,51 @@ fn draft_wide_node(source: u32) -> WideDraft {
     }
     let centre = lo + hi;
 
-    // Octant slots, best (child, slot) pair first.
-    var slot_of: array<u32, 8>;
-    var free_slots = 0xffu;
-    var placed = 0u;
-    for (var round = 0u; round < count; round++) {
-        var best_score = -3.4e38;
-        var best_child = 0u;
-        var best_slot = 0u;
-        for (var j = 0u; j < count; j++) {
-            if ((placed >> j) & 1u) != 0u {
-                continue;
-            }
-            let d = (child[j].min + child[j].max) - centre;
-            for (var s = 0u; s < 8u; s++) {
-                if ((free_slots >> s) & 1u) == 0u {
-                    continue;
-                }
-                let score = select(-d.x, d.x, (s & 1u) != 0u) + select(-d.y, d.y, (s & 2u) != 0u) + select(-d.z, d.z, (s & 4u) != 0u);
-                if score > best_score {
-                    best_score = score;
-                    best_child = j;
-                    best_slot = s;
-                }
-            }
-        }
-        slot_of[best_child] = best_slot;
-        placed |= 1u << best_child;
-        free_slots &= ~(1u << best_slot);
+    // Octant slots, best (child, slot) pair first (the first child, then the first slot, of
+    // equal scores). Each child's eight scores Σ_a ±offset_a (+ where bit a of the slot is set)
+    // are computed once, as two vec4 of slots 0-3 and 4-7 (the CPU twin's sums, in its order);
+    // a round takes the best free score of each unplaced child, then the first free slot of the
+    // best child with that score: the pairs of scanning every (child, free slot) pair in order.
+    // The loops run over all eight children (those past `count` count as placed), so that no
+    // array is indexed by a value a lane computes: such an array lives in memory (a GPU's local
+    // memory, a gather per lane on lavapipe).
+    var score_low: array<vec4<f32>, 8>;
+    var score_high: array<vec4<f32>, 8>;
+    for (var j = 0u; j < 8u; j++) {
+        let d = (child[j].min + child[j].max) - centre;
+        let xy = vec4<f32>(-d.x, d.x, -d.x, d.x) + vec4<f32>(-d.y, -d.y, d.y, d.y);
+        score_low[j] = xy + vec4<f32>(-d.z);
+        score_high[j] = xy + vec4<f32>(d.z);
     }
-    var in_slot = array<u32, 8>(8u, 8u, 8u, 8u, 8u, 8u, 8u, 8u);
-    for (var j = 0u; j < count; j++) {
-        in_slot[slot_of[j]] = j;
+    // Three bits per child: its slot.
+    var slot_bits = 0u;
+    var free_low = vec4<bool>(true);
+    var free_high = vec4<bool>(true);
+    var placed = 0xffu & ~((1u << count) - 1u);
+    for (var round = 0u; round < count; round++) {
+        var best_score = NO_SCORE;
+        var best_child = 0u;
+        var best_low = vec4<f32>(0.0);
+        var best_high = vec4<f32>(0.0);
+        for (var j = 0u; j < 8u; j++) {
+            let low = select(vec4<f32>(-F32_MAX), score_low[j], free_low);
+            let high = select(vec4<f32>(-F32_MAX), score_high[j], free_high);
+            let both = max(low, high);
+            let score = max(max(both.x, both.y), max(both.z, both.w));
+            let better = ((placed >> j) & 1u) == 0u && score > best_score;
+            best_score = select(best_score, score, better);
+            best_child = select(best_child, j, better);
+            best_low = select(best_low, score_low[j], better);
+            best_high = select(best_high, score_high[j], better);
+        }
+        let low = free_low & (best_low == vec4<f32>(best_score));
+        let high = free_high & (best_high == vec4<f32>(best_score));
+        let slots = select(vec4<u32>(0u), vec4<u32>(1u, 2u, 4u, 8u), low) | select(vec4<u32>(0u), vec4<u32>(16u, 32u, 64u, 128u), high);
+        let slot = firstTrailingBit(slots.x | slots.y | slots.z | slots.w);
+        slot_bits |= slot << (3u * best_child);
+        placed |= 1u << best_child;
+        free_low &= vec4<u32>(slot) != vec4<u32>(0u, 1u, 2u, 3u);
+        free_high &= vec4<u32>(slot) != vec4<u32>(4u, 5u, 6u, 7u);
     }
 
     let e = vec3<u32>(axis_exponent(lo.x, hi.x), axis_exponent(lo.y, hi.y), axis_exponent(lo.z, hi.z));
@@ -235,11 +252,12 @@ fn draft_wide_node(source: u32) -> WideDraft {
     var imask = 0u;
     var internal = 0u;
     var prims = 0u;
-    for (var s = 0u; s < 8u; s++) {
-        let j = in_slot[s];
-        if j == 8u {
+    var slot_words: array<u32, 8>;
+    for (var j = 0u; j < 8u; j++) {
+        if j >= count {
             continue;
         }
+        let s = (slot_bits >> (3u * j)) & 7u;
         let c = child[j];
         out.lo_x = with_byte(out.lo_x, s, quantize_lo(c.min.x, lo.x, e.x));
         out.lo_y = with_byte(out.lo_y, s, quantize_lo(c.min.y, lo.y, e.y));
@@ -247,7 +265,8 @@ fn draft_wide_node(source: u32) -> WideDraft {
         out.hi_x = with_byte(out.hi_x, s, quantize_hi(c.max.x, lo.x, e.x));
         out.hi_y = with_byte(out.hi_y, s, quantize_hi(c.max.y, lo.y, e.y));
         out.hi_z = with_byte(out.hi_z, s, quantize_hi(c.max.z, lo.z, e.z));
-        if (c.right_or_count & LEAF_FLAG) != 0u {
+        let is_leaf = (c.right_or_count & LEAF_FLAG) != 0u;
+        if is_leaf {
             let n = c.right_or_count & ~LEAF_FLAG;
             out.leaf_counts = with_byte(out.leaf_counts, s, n);
             prims += n;
@@ -255,15 +274,13 @@ fn draft_wide_node(source: u32) -> WideDraft {
             imask |= 1u << s;
             internal++;
         }
-    }
-    out.exponents = e.x | (e.y << 8u) | (e.z << 16u) | (imask << 24u);
-    var slot_words: array<u32, 8>;
-    for (var s = 0u; s < 8u; s++) {
-        let j = in_slot[s];
-        if j != 8u {
-            slot_words[s] = select(child_index[j], child[j].left_or_first, (child[j].right_or_count & LEAF_FLAG) != 0u);
+        // Written to every slot, kept in slot s: no array indexed by s.
+        let word = select(child_index[j], c.left_or_first, is_leaf);
+        for (var t = 0u; t < 8u; t++) {
+            slot_words[t] = select(slot_words[t], word, t == s);
         }
     }
+    out.exponents = e.x | (e.y << 8u) | (e.z << 16u) | (imask << 24u);
     return WideDraft(out, internal, prims, slot_words);
 }
 
