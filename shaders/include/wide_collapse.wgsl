@@ -106,6 +106,25 @@ fn with_byte(bytes: vec2<u32>, slot: u32, value: u32) -> vec2<u32> {
     return bytes | select(vec2<u32>(shifted, 0u), vec2<u32>(0u, shifted), slot >= 4u);
 }
 
+// The greedy collapse's key of a child: its half area if it is an internal node, else -1 (never
+// opened; an internal node's area is at least 0).
+fn openable_area(node: BvhNode) -> f32 {
+    return select(half_area(node.min, node.max, params.zero), -1.0, (node.right_or_count & LEAF_FLAG) != 0u);
+}
+
+// Makes `node` (binary node `index`) child `at` of a wide node being drafted, by selects over
+// every entry: arrays indexed only at indices the loops fix stay out of memory.
+fn set_child(child: ptr<function, array<BvhNode, 8>>, child_index: ptr<function, array<u32, 8>>, at: u32, node: BvhNode, index: u32) {
+    for (var t = 0u; t < 8u; t++) {
+        let here = t == at;
+        (*child)[t].min = select((*child)[t].min, node.min, here);
+        (*child)[t].left_or_first = select((*child)[t].left_or_first, node.left_or_first, here);
+        (*child)[t].max = select((*child)[t].max, node.max, here);
+        (*child)[t].right_or_count = select((*child)[t].right_or_count, node.right_or_count, here);
+        (*child_index)[t] = select((*child_index)[t], index, here);
+    }
+}
+
 // Below every score: a (child, slot) pair scores more than this to be taken (the CPU twin's
 // start).
 const NO_SCORE: f32 = -3.4e38;
@@ -122,14 +141,15 @@ struct WideDraft {
 
 // The wide node made from binary node `source` (steps 1-3).
 fn draft_wide_node(source: u32) -> WideDraft {
+    // Written through `set_child` only, and read at indices the loops fix: no index a lane
+    // computes (see the slots below).
     var child: array<BvhNode, 8>;
     var child_index: array<u32, 8>;
     var count = 0u;
     let top = nodes[source];
     if (top.right_or_count & LEAF_FLAG) != 0u {
         // A tree of one leaf.
-        child[0] = top;
-        child_index[0] = source;
+        set_child(&child, &child_index, 0u, top, source);
         count = 1u;
     } else if params.collapse == COLLAPSE_OPTIMAL {
         // (binary node, slots) still to expand, the next on top: at most 8, as each holds a slot.
@@ -145,8 +165,7 @@ fn draft_wide_node(source: u32) -> WideDraft {
             let node = nodes[n];
             loop {
                 if (node.right_or_count & LEAF_FLAG) != 0u || slots == 1u {
-                    child[count] = node;
-                    child_index[count] = n;
+                    set_child(&child, &child_index, count, node, n);
                     count++;
                     break;
                 }
@@ -162,40 +181,43 @@ fn draft_wide_node(source: u32) -> WideDraft {
             }
         }
     } else {
-        child_index[0] = top.left_or_first;
-        child_index[1] = top.right_or_count;
-        child[0] = nodes[top.left_or_first];
-        child[1] = nodes[top.right_or_count];
+        set_child(&child, &child_index, 0u, nodes[top.left_or_first], top.left_or_first);
+        set_child(&child, &child_index, 1u, nodes[top.right_or_count], top.right_or_count);
+        // Each child's area once, when it is loaded; -1 for a leaf or no child (never opened).
+        var area = array<f32, 8>(openable_area(child[0]), openable_area(child[1]), -1.0, -1.0, -1.0, -1.0, -1.0, -1.0);
         count = 2u;
         while count < 8u {
             var widest = 8u;
             var widest_area = -1.0;
-            for (var j = 0u; j < count; j++) {
-                if (child[j].right_or_count & LEAF_FLAG) == 0u {
-                    let a = half_area(child[j].min, child[j].max, params.zero);
-                    if a > widest_area {
-                        widest = j;
-                        widest_area = a;
-                    }
-                }
+            var opened = top;
+            for (var j = 0u; j < 8u; j++) {
+                let wider = area[j] > widest_area;
+                widest = select(widest, j, wider);
+                widest_area = select(widest_area, area[j], wider);
+                opened.left_or_first = select(opened.left_or_first, child[j].left_or_first, wider);
+                opened.right_or_count = select(opened.right_or_count, child[j].right_or_count, wider);
             }
             if widest == 8u {
                 break;
             }
-            let opened = child[widest];
-            child_index[widest] = opened.left_or_first;
-            child_index[count] = opened.right_or_count;
-            child[widest] = nodes[opened.left_or_first];
-            child[count] = nodes[opened.right_or_count];
+            let left = nodes[opened.left_or_first];
+            let right = nodes[opened.right_or_count];
+            set_child(&child, &child_index, widest, left, opened.left_or_first);
+            set_child(&child, &child_index, count, right, opened.right_or_count);
+            let left_area = openable_area(left);
+            let right_area = openable_area(right);
+            for (var t = 0u; t < 8u; t++) {
+                area[t] = select(select(area[t], left_area, t == widest), right_area, t == count);
+            }
             count++;
         }
     }
 
     var lo = child[0].min;
     var hi = child[0].max;
-    for (var j = 1u; j < count; j++) {
-        lo = min(lo, child[j].min);
-        hi = max(hi, child[j].max);
+    for (var j = 1u; j < 8u; j++) {
+        lo = select(lo, min(lo, child[j].min), j < count);
+        hi = select(hi, max(hi, child[j].max), j < count);
     }
     let centre = lo + hi;
 
