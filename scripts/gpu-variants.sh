@@ -49,7 +49,7 @@ run)
   : > "$out/variants.jsonl"
   ls .gpu/variant-*.xz > /dev/null 2>&1 || { echo "no .gpu/variant-*.xz: run 'bash scripts/gpu-variants.sh build' first"; exit 1; }
   # The variants whose answer decides the most first (a capped run keeps those), then any others.
-  first="${ORDER:-wide-group-registers shadow-inner-loop}"
+  first="${ORDER:-formation-dynamic wide-dynamic-draft wide-group-registers shadow-inner-loop}"
   names=$( (for n in $first; do [ -f ".gpu/variant-$n.xz" ] && echo "$n"; done
     for f in .gpu/variant-*.xz; do n=$(basename "$f" .xz); echo "${n#variant-}"; done) | awk '!seen[$0]++')
   for name in $names; do
@@ -74,7 +74,7 @@ run)
   python3 - "$out/variants.jsonl" <<'PY'
 import json, statistics, sys
 rows = [json.loads(l) for l in open(sys.argv[1]) if l.startswith("{")]
-print("variant          scene            builder      layout  binary           build ms  Mrays/s        rays   sah")
+print("variant          scene            builder      layout  binary           build ms  treelets ms  wide ms  Mrays/s        rays   sah")
 keys = dict.fromkeys((r["variant"], r["scene"], r["builder"], r["layout"]) for r in rows)
 for v, s, b, l in keys:
     for tag in ("main", v):
@@ -83,7 +83,11 @@ for v, s, b, l in keys:
             continue
         build = statistics.median(r["build_ms"] for r in g)
         mrays = statistics.median(r.get("mrays_per_s") or 0 for r in g)
-        print(f"{v[:16]:16} {s[-16:]:16} {b:12} {l:7} {tag[:16]:16} {build:8.3f} {mrays:8.1f} {g[0].get('rays') or 0:11}  {g[0]['sah']:.4f}")
+        stage = lambda r, *names: sum(r["stages_ms"].get(n) or 0 for n in names)
+        treelets = statistics.median(stage(r, "treelets", "treelets climb") for r in g)
+        wide = statistics.median(stage(r, "wide") for r in g)
+        print(f"{v[:16]:16} {s[-16:]:16} {b:12} {l:7} {tag[:16]:16} {build:8.3f} {treelets:12.3f} {wide:8.3f}"
+              f" {mrays:8.1f} {g[0].get('rays') or 0:11}  {g[0]['sah']:.4f}")
 PY
   ;;
 *)
