@@ -132,21 +132,13 @@ fn best_partition(s: u32) -> vec2<u32> {
 }
 
 // Makes `node` the treelet's leaf i: its box, children and area, from one load of the node.
-// Every entry is written, by selects (i is a value the lane computed in the formation): arrays
-// indexed only at indices the loops fix stay out of memory (a GPU's local memory, a gather per
-// lane on lavapipe).
 fn take_leaf(i: u32, node: u32) {
     let n = nodes[node];
-    let children = vec2<u32>(n.left_or_first, n.right_or_count);
-    let area = select(surface_area(n.min, n.max, params.zero), -1.0, (n.right_or_count & LEAF_FLAG) != 0u);
-    for (var t = 0u; t < MAX_TREELET; t++) {
-        let here = t == i;
-        leaf_node[t] = select(leaf_node[t], node, here);
-        leaf_min[t] = select(leaf_min[t], n.min, here);
-        leaf_max[t] = select(leaf_max[t], n.max, here);
-        leaf_children[t] = select(leaf_children[t], children, here);
-        leaf_area[t] = select(leaf_area[t], area, here);
-    }
+    leaf_node[i] = node;
+    leaf_min[i] = n.min;
+    leaf_max[i] = n.max;
+    leaf_children[i] = vec2<u32>(n.left_or_first, n.right_or_count);
+    leaf_area[i] = select(surface_area(n.min, n.max, params.zero), -1.0, (n.right_or_count & LEAF_FLAG) != 0u);
 }
 
 // Steps 1 and 2: the root's cost from its children (final now), stored and returned; the treelet
@@ -157,29 +149,22 @@ fn form_treelet(root: u32) -> f32 {
     root_prims = prim_counts[root];
     let current = combine_cost(surface_area(r.min, r.max, params.zero), root_prims, costs[r.left_or_first] + costs[r.right_or_count]);
     costs[root] = current;
-    // No leaf yet: never expanded (-1: a tree leaf; an internal node's area is at least 0).
-    for (var t = 0u; t < MAX_TREELET; t++) {
-        leaf_area[t] = -1.0;
-    }
     take_leaf(0u, r.left_or_first);
     take_leaf(1u, r.right_or_count);
     internal_node[0] = root;
     for (var count = 2u; count < TREELET_SIZE; count++) {
-        // The leaf of largest area (the first of equal ones), with its node and children.
         var best = 0u;
         var best_area = -1.0;
-        var best_node = 0u;
-        var best_children = vec2<u32>(0u);
-        for (var i = 0u; i < MAX_TREELET; i++) {
-            let larger = leaf_area[i] > best_area;
-            best = select(best, i, larger);
-            best_area = select(best_area, leaf_area[i], larger);
-            best_node = select(best_node, leaf_node[i], larger);
-            best_children = select(best_children, leaf_children[i], larger);
+        for (var i = 0u; i < count; i++) {
+            if leaf_area[i] > best_area {
+                best_area = leaf_area[i];
+                best = i;
+            }
         }
-        internal_node[count - 1u] = best_node;
-        take_leaf(best, best_children.x);
-        take_leaf(count, best_children.y);
+        internal_node[count - 1u] = leaf_node[best];
+        let children = leaf_children[best];
+        take_leaf(best, children.x);
+        take_leaf(count, children.y);
     }
     for (var i = 0u; i < MAX_TREELET; i++) {
         if i < TREELET_SIZE {
