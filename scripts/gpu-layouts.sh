@@ -42,14 +42,15 @@ for o in optimal:
 runs = {}
 for r in rows:
     runs.setdefault((r["scene"], r["builder"]), {})[r["layout"]] = r
-print("scene            builder      build ms  wide ms  disp  binary Mrays/s  wide Mrays/s  wide/binary  bytes w/b")
+print("scene            builder      build ms  wide ms  disp  wide levels/disp  binary Mrays/s  wide Mrays/s  wide/binary  bytes w/b")
 for (scene, builder), l in runs.items():
     b, w = l.get("binary"), l.get("wide")
     if not (b and w):
         continue
     ratio = (w["mrays_per_s"] or 0) / (b["mrays_per_s"] or 1)
     print(f"{scene[-16:]:16} {builder:11} {b['build_ms']:9.2f} {w['stages_ms'].get('wide') or 0:8.2f}"
-          f" {b['dispatches']:5} {b['mrays_per_s'] or 0:15.1f} {w['mrays_per_s'] or 0:13.1f}"
+          f" {b['dispatches']:5} {w.get('wide_levels') or 0:8}/{w['stages_dispatches'].get('wide') or 0:<8}"
+          f" {b['mrays_per_s'] or 0:15.1f} {w['mrays_per_s'] or 0:13.1f}"
           f" {ratio:12.2f} {w['tree_bytes'] / b['tree_bytes']:10.2f}")
     # Both layouts trace the same paths: their ray counts agree but for ties (an H200 once counted
     # 5 % of crytek_sponza's rays through the wide layout, and its Mrays/s meant nothing).

@@ -308,7 +308,9 @@ fn bench_converts_by_both_wide_collapses() {
     for run in [optimal, greedy] {
         assert_eq!(run["valid"], true);
         assert_eq!(run["wide_sah_optimal"], optimal["wide_sah_optimal"]);
+        assert!(run["wide_levels"].as_u64() > Some(1), "{run}");
     }
+    assert!(default[0]["wide_levels"].as_u64() > Some(1));
     assert_eq!(optimal["wide_sah"], optimal["wide_sah_optimal"]);
     assert!(greedy["wide_sah"].as_f64() > optimal["wide_sah"].as_f64());
     assert!(optimal["nodes"].as_u64() < greedy["nodes"].as_u64());

@@ -311,7 +311,8 @@ fn balanced_tree(triangles: &[Triangle]) -> Bvh {
 
 /// A balanced tree of 2·8^k leaves converts greedily into the most wide nodes a tree of its size
 /// can make (`max_wide_nodes`: 73 for 128 leaves, nodes of 8 children down to nodes over two
-/// leaves), and the GPU's node buffer, sized from the binary buffer, holds exactly that many. The
+/// leaves, in k + 1 levels), and the GPU's node buffer, sized from the binary buffer, holds
+/// exactly that many. The
 /// optimal collapse's buffer is sized by its own bound (leaves − 1).
 #[test]
 fn largest_conversion_fits_the_node_buffer() {
@@ -341,6 +342,8 @@ fn largest_conversion_fits_the_node_buffer() {
     // Fails if the conversion ran out of room.
     let wide = wide_tree.download(gpu()).unwrap();
     assert_eq!(wide.nodes.len(), 73);
+    // The root, 8 nodes, then 64 nodes over two leaves each.
+    assert_eq!(wide.levels(), 3);
     validate_wide(&wide, &scene.triangles).unwrap();
     assert_eq!(
         canonical(&wide),

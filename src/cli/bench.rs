@@ -208,6 +208,9 @@ struct BenchRecord {
     /// SAH-optimal collapse of the same binary tree (Ylitie et al.'s DP).
     wide_sah: Option<f64>,
     wide_sah_optimal: Option<f64>,
+    /// Wide layout: levels of the traced wide tree (the GPU conversion emits a level per step:
+    /// the level dispatches past them find no work).
+    wide_levels: Option<usize>,
     valid: bool,
     width: u32,
     height: u32,
@@ -284,6 +287,7 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
         let optimal = collapse == WideCollapse::Optimal;
         let label = run_label(builder, schedule, layout, collapse);
         let references = builder.duplicates_references();
+        let mut wide_levels = None;
         let (validation, nodes, leaves, tree_bytes) = match &tree.wide {
             None => {
                 let validation = if references {
@@ -307,6 +311,7 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
                     write_wide_bvh(&path, &wide, scene.triangles.len() as u32)?;
                     log::info!("wrote {}", path.display());
                 }
+                wide_levels = Some(wide.levels());
                 (
                     validation,
                     wide.nodes.len(),
@@ -400,6 +405,7 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
             wide_collapse: (layout == Layout::Wide).then_some(collapse.name()),
             wide_sah: wide_sah.map(|c| if optimal { c.1 } else { c.0 }),
             wide_sah_optimal: wide_sah.map(|c| c.1),
+            wide_levels,
             valid: validation.is_ok(),
             width: args.trace.width,
             height: args.trace.height,

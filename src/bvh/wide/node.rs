@@ -125,6 +125,28 @@ impl WideBvh {
         std::mem::size_of_val(self.nodes.as_slice()) + 4 * self.prim_indices.len()
     }
 
+    /// Levels of the tree (1 for a root alone; 0 without nodes): the GPU conversion emits one
+    /// level at a time, so this is how many of its level steps find work.
+    pub fn levels(&self) -> usize {
+        let mut level: Vec<u32> = if self.nodes.is_empty() {
+            vec![]
+        } else {
+            vec![0]
+        };
+        let mut levels = 0;
+        while !level.is_empty() {
+            levels += 1;
+            level = level
+                .iter()
+                .flat_map(|&n| {
+                    let node = &self.nodes[n as usize];
+                    (0..node.imask().count_ones()).map(move |k| node.child_base + k)
+                })
+                .collect();
+        }
+        levels
+    }
+
     /// Leaf children over all nodes.
     pub fn leaf_count(&self) -> usize {
         self.nodes
