@@ -5,7 +5,8 @@
 # and the climb, the team threshold TEAMS, and levels dispatched where LEVELS is set:
 # "schedules"), the changes of scripts/variants/ beside this commit ("variants", when
 # `bash scripts/gpu-variants.sh build` packed them), build scaling
-# ("scaling"), where a treelet level's time goes ("probe", when `bash scripts/gpu-probe.sh build`
+# ("scaling"), the wide conversion's level dispatches ("widelevels"), where a treelet level's
+# time goes ("probe", when `bash scripts/gpu-probe.sh build`
 # packed its variants), every dispatch of lbvh timed per sort tile ("profile") and every dispatch
 # of trbvh and trbvh-split with the wide conversion timed ("kernels"). Each step is capped
 # so that the whole run ends within BUDGET seconds (default 500; STEPS picks some of the steps, e.g.
@@ -32,7 +33,7 @@ save() { tar -C $res -czf "$final/results.tar.gz" .; }
 step() {
   local name=$1 cap=$2 left
   shift 2
-  case " ${STEPS:-tests schedules scaling probe variants layouts profile kernels} " in
+  case " ${STEPS:-tests schedules scaling widelevels probe variants layouts profile kernels} " in
     *" $name "*) ;;
     *) return ;;
   esac
@@ -81,6 +82,15 @@ scaling() {
   fi
 }
 export -f scaling
+# The wide conversion's level dispatches (the ones past a shallow tree find no work, a deep tree's
+# levels past them go to one workgroup; README, "Level dispatches past the tree").
+wide_levels() {
+  for s in conference crytek_sponza lost_empire field:707; do
+    timeout 40 $TREELET bench --scene $s --builder trbvh --layout wide \
+      --wide-level-dispatches 6,8,10,12,14,16,20 $small >> $res/widelevels.jsonl
+  done
+}
+export -f wide_levels
 export small base work
 tests() {
   # shellcheck disable=SC2016
@@ -101,6 +111,7 @@ if ls .gpu/variant-*.xz > /dev/null 2>&1; then
   step variants 150 env TREELET=$TREELET bash scripts/gpu-variants.sh run
 fi
 step scaling 100 bash -c scaling
+step widelevels 60 bash -c wide_levels
 if ls .gpu/probe-*.xz > /dev/null 2>&1; then
   step probe 40 env SCENES="conference" REPEATS=5 TREELET=$TREELET bash scripts/gpu-probe.sh run
 fi
@@ -124,6 +135,10 @@ res = sys.argv[1]
 def rows(name):
     p = os.path.join(res, name)
     return [json.loads(l) for l in open(p) if l.startswith("{")] if os.path.exists(p) else []
+print("widelevels.jsonl: scene, wide levels, level dispatches asked, wide stage ms, build ms")
+for r in rows("widelevels.jsonl"):
+    print(f"  {os.path.basename(r['scene'])[:14]:14} {r.get('wide_levels') or 0:3} {r.get('wide_level_dispatches')!s:>4}"
+          f" {(r.get('stages_ms') or {}).get('wide') or 0:7.3f} {r['build_ms']:7.2f}")
 for name in ("scaling.jsonl", "baseline.jsonl"):
     print(f"{name}: scene, builder, triangles, build ms (min/median/max), Mtris/s, stages ms, SAH")
     for r in rows(name):

@@ -248,6 +248,48 @@ fn bench_compares_dp_forms_on_the_same_tree() {
     }
 }
 
+/// `bench --wide-level-dispatches` converts the same tree with every split of the wide levels
+/// between indirect dispatches and the one-workgroup finish (the root's dispatch and the finish
+/// always run), reports the count asked for, and is refused without the wide layout.
+#[test]
+fn bench_wide_level_dispatches_convert_the_same_tree() {
+    let records = quick_bench(
+        "trbvh",
+        &["--layout", "wide", "--wide-level-dispatches", "0,3,32"],
+    );
+    let asked: Vec<_> = records
+        .iter()
+        .map(|r| r["wide_level_dispatches"].as_u64())
+        .collect();
+    assert_eq!(asked, [Some(0), Some(3), Some(32)]);
+    let dispatches: Vec<_> = records
+        .iter()
+        .map(|r| r["stages_dispatches"]["wide"].as_u64().unwrap())
+        .collect();
+    // The root's dispatch (levels 0-2), the level dispatches after it, the finish.
+    assert_eq!(dispatches, [2, 3, 32]);
+    for record in &records {
+        assert_eq!(record["valid"], true);
+        for key in ["nodes", "wide_sah", "wide_levels", "sah"] {
+            assert_eq!(record[key], records[0][key], "{key}");
+        }
+    }
+    assert_clean_failure(
+        &[
+            "bench",
+            "--scene",
+            "cornell",
+            "--wide-level-dispatches",
+            "3",
+        ],
+        "applies to the wide layout",
+    );
+    assert_clean_failure(
+        &["bench", "--layout", "wide", "--wide-level-dispatches", "33"],
+        "--wide-level-dispatches",
+    );
+}
+
 /// `bench --sort-tile-items` sorts in tiles of 2048, 4096 or 8192 keys; every tile builds the
 /// same trees, and other values are refused.
 #[test]

@@ -12,7 +12,7 @@ use common::{assert_hits_equal, cpu_traversal_hits, gpu, oracle_hits, record_upd
 use glam::{Quat, Vec3};
 use rand::Rng;
 use treelet::bvh::treelet::RoundSchedule;
-use treelet::bvh::wide::{Layout, WideCollapse};
+use treelet::bvh::wide::{Layout, WideOptions};
 use treelet::bvh::{validate_with_references, Builder, SahParams, TreeUpdater, UpdateMode};
 use treelet::device::{Geometry, Tree};
 use treelet::geometry::{Hit, Ray};
@@ -396,7 +396,7 @@ fn any_hit_respects_the_interval() {
             &SahParams::default(),
             &Timing::quick(1),
             Layout::Wide,
-            WideCollapse::default(),
+            WideOptions::default(),
             RoundSchedule::default(),
         )
         .unwrap();

@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use super::treelet::{RoundSchedule, TreeletSettings};
 use super::update::{TreeUpdater, UpdateMode};
-use super::wide::{check_leaf_sizes, Layout, WideCollapse, WideConverter};
+use super::wide::{check_leaf_sizes, Layout, WideConverter, WideOptions};
 use super::{build_sbvh, build_sweep_sah, Bvh, SahParams};
 use crate::device::{Geometry, Tree};
 use crate::gpu::{GpuContext, GpuTimer, ParamSlab, Recorder, StageTime, Timing, Warmup};
@@ -137,8 +137,8 @@ impl Builder {
     /// `timing.repeats` timed builds, each submitted and waited for, reporting the one with the
     /// median time; the wide layout's conversion is one of their stages ("wide"). CPU builders
     /// are timed once, and their upload is converted once on the GPU (timed as "wide").
-    /// `collapse` is the wide conversion's; `schedule` spreads the treelet rounds over the device
-    /// (trbvh, trbvh-split).
+    /// `wide` sets the wide conversion (its collapse and level dispatches); `schedule` spreads the
+    /// treelet rounds over the device (trbvh, trbvh-split).
     #[allow(clippy::too_many_arguments)]
     pub fn build(
         self,
@@ -147,19 +147,19 @@ impl Builder {
         params: &SahParams,
         timing: &Timing,
         layout: Layout,
-        collapse: WideCollapse,
+        wide: WideOptions,
         schedule: RoundSchedule,
     ) -> Result<(Geometry, Tree, BuildReport)> {
         let geometry = Geometry::upload(ctx, scene)?;
         match self {
             Builder::Sweep => {
-                let converter = wide_converter(ctx, params, layout, collapse);
+                let converter = wide_converter(ctx, params, layout, wide);
                 cpu_build(ctx, geometry, "cpu sweep", converter, || {
                     build_sweep_sah(&scene.triangles, params)
                 })
             }
             Builder::Sbvh => {
-                let converter = wide_converter(ctx, params, layout, collapse);
+                let converter = wide_converter(ctx, params, layout, wide);
                 cpu_build(ctx, geometry, "cpu sbvh", converter, || {
                     build_sbvh(&scene.triangles, params)
                 })
@@ -167,8 +167,11 @@ impl Builder {
             Builder::Lbvh | Builder::Trbvh(_) | Builder::TrbvhSplit(_) => {
                 let mut tree = Tree::empty(ctx)?;
                 let mut updater = TreeUpdater::new(ctx, UpdateMode::Rebuild(self), params)?;
-                updater.set_wide_collapse(collapse);
+                updater.set_wide_collapse(wide.collapse);
                 updater.set_layout(ctx, layout);
+                if let Some(converter) = updater.converter_mut() {
+                    converter.set_level_dispatches(wide.level_dispatches);
+                }
                 updater.set_round_schedule(schedule);
                 let passes = updater.pass_count();
                 let mut slab = ParamSlab::new(ctx);
@@ -222,11 +225,12 @@ fn wide_converter(
     ctx: &GpuContext,
     params: &SahParams,
     layout: Layout,
-    collapse: WideCollapse,
+    wide: WideOptions,
 ) -> Option<WideConverter> {
     (layout == Layout::Wide).then(|| {
         let mut converter = WideConverter::new(ctx, params);
-        converter.set_collapse(collapse);
+        converter.set_collapse(wide.collapse);
+        converter.set_level_dispatches(wide.level_dispatches);
         converter
     })
 }

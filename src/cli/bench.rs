@@ -13,6 +13,7 @@ use treelet::anim::load_still;
 use treelet::bvh::treelet::{RoundSchedule, TreeletDp, MAX_LEVEL_DISPATCHES};
 use treelet::bvh::wide::{
     validate_wide, validate_wide_with_references, wide_sah_costs, Layout, WideCollapse,
+    WideOptions, MAX_WIDE_LEVEL_DISPATCHES,
 };
 use treelet::bvh::{
     sah_cost, validate, validate_with_references, write_bvh, write_wide_bvh, Builder,
@@ -68,6 +69,13 @@ pub struct BenchArgs {
     /// as --treelet-dp); a comma-separated list to compare. The tree is the same for both
     #[arg(long, value_delimiter = ',', value_enum)]
     climb_dp: Vec<DpForm>,
+    /// Levels of the wide conversion below the root's dispatch given an indirect dispatch of
+    /// their own, 0-32, the deeper ones emitted by one workgroup (wide layout; default: log2 of
+    /// the references + 2 on GPUs); a comma-separated list to compare. The tree is the same for
+    /// every value
+    #[arg(long, value_delimiter = ',',
+          value_parser = clap::value_parser!(u32).range(0..=i64::from(MAX_WIDE_LEVEL_DISPATCHES)))]
+    wide_level_dispatches: Vec<u32>,
     /// Time every dispatch on its own (each in a compute pass of its own, which may cost a little
     /// more than the passes of a normal build) and list them in `dispatch_ms`
     #[arg(long)]
@@ -128,6 +136,17 @@ impl BenchArgs {
             }
         }
         Ok(schedules)
+    }
+
+    /// The wide conversion's level dispatch counts asked for (None: the default), refused
+    /// without the wide layout, to which they apply.
+    fn wide_level_dispatches(&self, layouts: &[Layout]) -> Result<Vec<Option<u32>>> {
+        if !self.wide_level_dispatches.is_empty() && !layouts.contains(&Layout::Wide) {
+            return Err(treelet::Error::InvalidArgument(
+                "--wide-level-dispatches applies to the wide layout (add --layout wide)".into(),
+            ));
+        }
+        Ok(or_default(&self.wide_level_dispatches))
     }
 }
 
@@ -204,6 +223,9 @@ struct BenchRecord {
     sah: f32,
     /// Wide layout: the conversion's collapse (`--wide-collapse`: optimal or greedy).
     wide_collapse: Option<&'static str>,
+    /// Wide layout: the level dispatches asked for (`--wide-level-dispatches`; null: from the
+    /// tree's size).
+    wide_level_dispatches: Option<u32>,
     /// Wide layout: SAH of the traced wide tree (of its collapse, `wide_collapse`) and of the
     /// SAH-optimal collapse of the same binary tree (Ylitie et al.'s DP).
     wide_sah: Option<f64>,
@@ -259,15 +281,27 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
     let layouts = &args.trace.layout;
     let collapses = args.trace.wide_collapses()?;
     let schedules = args.schedules(&builders)?;
-    // The binary layout once, the wide layout once per collapse.
-    let layout_runs: Vec<(Layout, WideCollapse)> = layouts
+    let wide_levels = args.wide_level_dispatches(layouts)?;
+    // The binary layout once, the wide layout once per collapse and level dispatch count.
+    let layout_runs: Vec<(Layout, WideOptions)> = layouts
         .iter()
         .flat_map(|&l| match l {
-            Layout::Binary => vec![(l, WideCollapse::default())],
-            Layout::Wide => collapses.iter().map(|&c| (l, c)).collect(),
+            Layout::Binary => vec![(l, WideOptions::default())],
+            Layout::Wide => collapses
+                .iter()
+                .flat_map(|&collapse| {
+                    wide_levels.iter().map(move |&level_dispatches| {
+                        let wide = WideOptions {
+                            collapse,
+                            level_dispatches,
+                        };
+                        (l, wide)
+                    })
+                })
+                .collect(),
         })
         .collect();
-    let runs: Vec<(Builder, RoundSchedule, Layout, WideCollapse)> = builders
+    let runs: Vec<(Builder, RoundSchedule, Layout, WideOptions)> = builders
         .iter()
         .flat_map(|&b| {
             let schedules = match b.treelet_settings() {
@@ -280,12 +314,20 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
                 .flat_map(move |s| layout_runs.iter().map(move |&(l, c)| (b, s, l, c)))
         })
         .collect();
-    for &(builder, schedule, layout, collapse) in &runs {
-        let (geometry, tree, report) =
-            builder.build(gpu, &scene, &params, &timing, layout, collapse, schedule)?;
+    for &(builder, schedule, layout, wide_options) in &runs {
+        let (geometry, tree, report) = builder.build(
+            gpu,
+            &scene,
+            &params,
+            &timing,
+            layout,
+            wide_options,
+            schedule,
+        )?;
         let bvh = tree.download(gpu)?;
+        let collapse = wide_options.collapse;
         let optimal = collapse == WideCollapse::Optimal;
-        let label = run_label(builder, schedule, layout, collapse);
+        let label = run_label(builder, schedule, layout, wide_options);
         let references = builder.duplicates_references();
         let mut wide_levels = None;
         let (validation, nodes, leaves, tree_bytes) = match &tree.wide {
@@ -403,6 +445,7 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
             dispatch_ms,
             sah: sah_cost(&bvh, &params),
             wide_collapse: (layout == Layout::Wide).then_some(collapse.name()),
+            wide_level_dispatches: wide_options.level_dispatches,
             wide_sah: wide_sah.map(|c| if optimal { c.1 } else { c.0 }),
             wide_sah_optimal: wide_sah.map(|c| c.1),
             wide_levels,
@@ -433,7 +476,7 @@ fn run_label(
     builder: Builder,
     schedule: RoundSchedule,
     layout: Layout,
-    collapse: WideCollapse,
+    wide: WideOptions,
 ) -> String {
     let mut label = builder.label();
     if let Some(levels) = schedule.level_dispatches {
@@ -448,9 +491,12 @@ fn run_label(
     if let Some(dp) = schedule.climb_dp {
         label += &format!(" climb-dp={}", dp.name());
     }
-    match layout {
-        Layout::Binary => format!("{label} binary"),
-        Layout::Wide => format!("{label} wide {}", collapse.name()),
+    match (layout, wide.level_dispatches) {
+        (Layout::Binary, _) => format!("{label} binary"),
+        (Layout::Wide, None) => format!("{label} wide {}", wide.collapse.name()),
+        (Layout::Wide, Some(levels)) => {
+            format!("{label} wide {} wd={levels}", wide.collapse.name())
+        }
     }
 }
 

@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use clap::Args;
 use treelet::anim::load_still;
 use treelet::bvh::treelet::RoundSchedule;
+use treelet::bvh::wide::WideOptions;
 use treelet::bvh::{Builder, UpdateMode};
 use treelet::gpu::{GpuContext, Timing};
 use treelet::trace::{save_png, PathTracer};
@@ -66,7 +67,7 @@ pub fn run(gpu: &GpuContext, args: &RenderArgs) -> Result<()> {
         &params,
         &Timing::quick(1),
         layout,
-        args.trace.single_wide_collapse()?,
+        WideOptions::collapse(args.trace.single_wide_collapse()?),
         RoundSchedule::default(),
     )?;
     let nodes = match &tree.wide {

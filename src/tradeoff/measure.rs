@@ -8,7 +8,7 @@
 
 use super::Measurement;
 use crate::bvh::treelet::RoundSchedule;
-use crate::bvh::wide::{Layout, WideCollapse};
+use crate::bvh::wide::{Layout, WideOptions};
 use crate::bvh::{sah_cost, validate, validate_with_references, Builder, SahParams};
 use crate::gpu::{GpuContext, Timing};
 use crate::scene::{Camera, Scene};
@@ -46,7 +46,7 @@ pub fn measure(
         &settings.sah,
         &Timing::quick(settings.repeats),
         Layout::Binary,
-        WideCollapse::default(),
+        WideOptions::default(),
         RoundSchedule::default(),
     )?;
     let bvh = tree.download(ctx)?;
