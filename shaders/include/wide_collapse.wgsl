@@ -262,10 +262,10 @@ fn draft_wide_node(source: u32) -> WideDraft {
         let high = free_high & (best_high == vec4<f32>(best_score));
         let slots = select(vec4<u32>(0u), vec4<u32>(1u, 2u, 4u, 8u), low) | select(vec4<u32>(0u), vec4<u32>(16u, 32u, 64u, 128u), high);
         let mask = slots.x | slots.y | slots.z | slots.w;
-        // No score beat NO_SCORE (only with boxes near the f32 range): child 0 and slot 0, as
-        // in the CPU twin.
+        // No score beat NO_SCORE (only with boxes near the f32 range): child 0 takes slot 0
+        // again, as in the CPU twin.
         let slot = select(0u, firstTrailingBit(mask), mask != 0u);
-        slot_bits |= slot << (3u * best_child);
+        slot_bits = (slot_bits & ~(7u << (3u * best_child))) | (slot << (3u * best_child));
         placed |= 1u << best_child;
         free_low &= vec4<u32>(slot) != vec4<u32>(0u, 1u, 2u, 3u);
         free_high &= vec4<u32>(slot) != vec4<u32>(4u, 5u, 6u, 7u);
