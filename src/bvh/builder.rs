@@ -167,11 +167,8 @@ impl Builder {
             Builder::Lbvh | Builder::Trbvh(_) | Builder::TrbvhSplit(_) => {
                 let mut tree = Tree::empty(ctx)?;
                 let mut updater = TreeUpdater::new(ctx, UpdateMode::Rebuild(self), params)?;
-                updater.set_wide_collapse(wide.collapse);
+                updater.set_wide_options(wide);
                 updater.set_layout(ctx, layout);
-                if let Some(converter) = updater.converter_mut() {
-                    converter.set_level_dispatches(wide.level_dispatches);
-                }
                 updater.set_round_schedule(schedule);
                 let passes = updater.pass_count();
                 let mut slab = ParamSlab::new(ctx);
@@ -229,8 +226,7 @@ fn wide_converter(
 ) -> Option<WideConverter> {
     (layout == Layout::Wide).then(|| {
         let mut converter = WideConverter::new(ctx, params);
-        converter.set_collapse(wide.collapse);
-        converter.set_level_dispatches(wide.level_dispatches);
+        converter.set_options(wide);
         converter
     })
 }

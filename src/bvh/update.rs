@@ -10,7 +10,7 @@ use std::time::Instant;
 use super::lbvh::{LbvhBuilder, LBVH_PASSES};
 use super::nodes_refit::{derive_refit_links, NodesRefit};
 use super::treelet::{RoundSchedule, TrbvhBuilder, TreeletSettings};
-use super::wide::{Layout, WideCollapse, WideConverter, MAX_WIDE_LEAF_SIZE};
+use super::wide::{Layout, WideCollapse, WideConverter, WideOptions, MAX_WIDE_LEAF_SIZE};
 use super::{build_sbvh, build_sweep_sah, Builder, SahParams};
 use crate::device::{Geometry, Tree};
 use crate::gpu::{GpuContext, Recorder, StageTime};
@@ -112,8 +112,8 @@ pub struct TreeUpdater {
     sah: SahParams,
     /// Wide layout: the conversion that follows every update.
     converter: Option<WideConverter>,
-    /// The wide conversion's collapse (kept while the layout is binary).
-    wide_collapse: WideCollapse,
+    /// The wide conversion's collapse and level dispatches (kept while the layout is binary).
+    wide: WideOptions,
 }
 
 impl TreeUpdater {
@@ -139,7 +139,7 @@ impl TreeUpdater {
             rebuild_topology: true,
             sah: *sah,
             converter: None,
-            wide_collapse: WideCollapse::default(),
+            wide: WideOptions::default(),
         })
     }
 
@@ -152,7 +152,7 @@ impl TreeUpdater {
                     .converter
                     .take()
                     .unwrap_or_else(|| WideConverter::new(ctx, &self.sah));
-                converter.set_collapse(self.wide_collapse);
+                converter.set_options(self.wide);
                 Some(converter)
             }
         };
@@ -161,9 +161,18 @@ impl TreeUpdater {
     /// How the wide layout's conversions collapse the binary tree (now and after a later
     /// `set_layout`).
     pub fn set_wide_collapse(&mut self, collapse: WideCollapse) {
-        self.wide_collapse = collapse;
+        self.set_wide_options(WideOptions {
+            collapse,
+            ..self.wide
+        });
+    }
+
+    /// How the wide layout's conversions collapse the binary tree and how many levels get a
+    /// dispatch of their own (now and after a later `set_layout`).
+    pub fn set_wide_options(&mut self, options: WideOptions) {
+        self.wide = options;
         if let Some(converter) = &mut self.converter {
-            converter.set_collapse(collapse);
+            converter.set_options(options);
         }
     }
 

@@ -13,7 +13,7 @@ use super::costs_climb::{CostParams, COSTS_CLIMB};
 use super::nodes_link::NODES_LINK;
 use super::wide_nodes_emit::{WideParams, WIDE_NODES_EMIT};
 use super::wide_nodes_finish::WIDE_NODES_FINISH;
-use super::WideCollapse;
+use super::{WideCollapse, WideOptions};
 use crate::bvh::{BvhNode, SahParams};
 use crate::device::{Tree, WideTree};
 use crate::gpu::{GpuContext, ItemCount, Items};
@@ -33,8 +33,8 @@ pub struct WideConverter {
     costs: Kernel<CostParams>,
     emit: Kernel<WideParams>,
     finish: Kernel<WideParams>,
-    forced_level_dispatches: Option<u32>,
-    collapse: WideCollapse,
+    /// The collapse and the forced level dispatches of the next conversions.
+    options: WideOptions,
     /// Ci and Ct of the optimal collapse's costs.
     sah: SahParams,
 }
@@ -48,19 +48,25 @@ impl WideConverter {
             costs: Kernel::climb(ctx, &COSTS_CLIMB),
             emit: Kernel::new(ctx, &WIDE_NODES_EMIT),
             finish: Kernel::new(ctx, &WIDE_NODES_FINISH),
-            forced_level_dispatches: None,
-            collapse: WideCollapse::default(),
+            options: WideOptions::default(),
             sah: *sah,
         }
     }
 
+    /// The collapse and level dispatches of the next conversions (`set_collapse`,
+    /// `set_level_dispatches`).
+    pub fn set_options(&mut self, options: WideOptions) {
+        self.set_collapse(options.collapse);
+        self.set_level_dispatches(options.level_dispatches);
+    }
+
     /// The collapse of the next conversions.
     pub fn set_collapse(&mut self, collapse: WideCollapse) {
-        self.collapse = collapse;
+        self.options.collapse = collapse;
     }
 
     pub fn collapse(&self) -> WideCollapse {
-        self.collapse
+        self.options.collapse
     }
 
     /// Level dispatches for a tree of up to `prims` references on a device of this type: on a
@@ -83,7 +89,7 @@ impl WideConverter {
     /// Fixes the number of level dispatches (tests: every schedule gives the same tree); `None`
     /// restores the default.
     pub fn set_level_dispatches(&mut self, dispatches: Option<u32>) {
-        self.forced_level_dispatches = dispatches.map(|d| d.min(MAX_WIDE_LEVEL_DISPATCHES));
+        self.options.level_dispatches = dispatches.map(|d| d.min(MAX_WIDE_LEVEL_DISPATCHES));
     }
 
     /// Records the conversion of `tree`'s binary tree into `tree.wide` (created or grown to the
@@ -93,14 +99,15 @@ impl WideConverter {
         let binary_nodes = (tree.nodes.size() / std::mem::size_of::<BvhNode>() as u64) as u32;
         let prims = (tree.prim_indices.size() / 4) as u32;
         // The tree in a buffer of n binary nodes has at most (n + 1) / 2 leaves.
-        let capacity = max_wide_nodes(binary_nodes.div_ceil(2), self.collapse);
+        let capacity = max_wide_nodes(binary_nodes.div_ceil(2), self.options.collapse);
         // The optimal collapse's scratch, per binary node (one word where the greedy one binds it).
-        let scratch_nodes = match self.collapse {
+        let scratch_nodes = match self.options.collapse {
             WideCollapse::Optimal => binary_nodes,
             WideCollapse::Greedy => 1,
         };
         let level_dispatches = self
-            .forced_level_dispatches
+            .options
+            .level_dispatches
             .unwrap_or_else(|| Self::level_dispatches(prims, ctx.info.device_type));
         let record_bytes = u64::from(RECORD_WORDS * (MAX_WIDE_LEVEL_DISPATCHES + 2)) * 4;
         let fits = tree.wide.as_ref().is_some_and(|w| {
@@ -124,7 +131,7 @@ impl WideConverter {
         }
         let scratch = &wide.collapse;
         let mut pass = rec.pass("wide");
-        if self.collapse == WideCollapse::Optimal {
+        if self.options.collapse == WideCollapse::Optimal {
             let nodes = ItemCount::OnGpu {
                 buffer: &tree.counts,
                 capacity: binary_nodes,
@@ -175,7 +182,7 @@ impl WideConverter {
             level_dispatches,
             capacity: wide.capacity,
             zero: 0,
-            collapse: match self.collapse {
+            collapse: match self.options.collapse {
                 WideCollapse::Greedy => 0,
                 WideCollapse::Optimal => 1,
             },

@@ -101,7 +101,7 @@ impl WideCollapse {
 
 /// How a build's wide conversion runs: its collapse, and how many levels below the root's
 /// dispatch get an indirect dispatch of their own before one workgroup finishes the rest
-/// (`WideConverter::set_level_dispatches`; None: from the tree's size). Every count makes the same
+/// (`WideConverter::set_options`; None: from the tree's size). Every count makes the same
 /// tree (tested); `bench --wide-level-dispatches` times them.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct WideOptions {
