@@ -281,7 +281,7 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
     let layouts = &args.trace.layout;
     let collapses = args.trace.wide_collapses()?;
     let schedules = args.schedules(&builders)?;
-    let wide_levels = args.wide_level_dispatches(layouts)?;
+    let wide_level_dispatches = args.wide_level_dispatches(layouts)?;
     // The binary layout once, the wide layout once per collapse and level dispatch count.
     let layout_runs: Vec<(Layout, WideOptions)> = layouts
         .iter()
@@ -290,7 +290,7 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
             Layout::Wide => collapses
                 .iter()
                 .flat_map(|&collapse| {
-                    wide_levels.iter().map(move |&level_dispatches| {
+                    wide_level_dispatches.iter().map(move |&level_dispatches| {
                         let wide = WideOptions {
                             collapse,
                             level_dispatches,
