@@ -189,21 +189,21 @@ fn draft_wide_node(source: u32) -> WideDraft {
         while count < 8u {
             var widest = 8u;
             var widest_area = -1.0;
-            var opened = top;
+            // The widest child's children (left, right).
+            var opened = vec2<u32>(0u);
             for (var j = 0u; j < 8u; j++) {
                 let wider = area[j] > widest_area;
                 widest = select(widest, j, wider);
                 widest_area = select(widest_area, area[j], wider);
-                opened.left_or_first = select(opened.left_or_first, child[j].left_or_first, wider);
-                opened.right_or_count = select(opened.right_or_count, child[j].right_or_count, wider);
+                opened = select(opened, vec2<u32>(child[j].left_or_first, child[j].right_or_count), wider);
             }
             if widest == 8u {
                 break;
             }
-            let left = nodes[opened.left_or_first];
-            let right = nodes[opened.right_or_count];
-            set_child(&child, &child_index, widest, left, opened.left_or_first);
-            set_child(&child, &child_index, count, right, opened.right_or_count);
+            let left = nodes[opened.x];
+            let right = nodes[opened.y];
+            set_child(&child, &child_index, widest, left, opened.x);
+            set_child(&child, &child_index, count, right, opened.y);
             let left_area = openable_area(left);
             let right_area = openable_area(right);
             for (var t = 0u; t < 8u; t++) {
