@@ -7,10 +7,12 @@
 //   2. lanes 0-15 and 16-31: the half tables' 16 entries each, straight from their leaves;
 //   3. the DP by subset size k = 2 ..= m: the C(m, k) subsets of size k (the table
 //      `subset_order`, `treelet::subsets_by_size`) side by side. When there are fewer subsets than
-//      lanes, each subset gets L lanes (a power of two) that take its partitions in turns, then
-//      reduce to the least cost, ties to the smallest P: P grows with the enumeration order, so
-//      this is the partition the serial search keeps. Costs and best partitions live in workgroup
-//      memory; a barrier separates sizes;
+//      lanes, each subset gets L = 2^b lanes (at most one per partition) that split its partitions
+//      by their b lowest bits: a lane fixes those to its own b bits and runs over every subset of
+//      the others, so it tests about 1/L of them, in increasing order, with no step skipped. The
+//      lanes then reduce to the least cost, ties to the smallest P, which is the partition the
+//      serial search keeps (it keeps the first of equal costs, in increasing order). Costs and
+//      best partitions live in workgroup memory; a barrier separates sizes;
 //   4. lane 0: the write-back, taking each internal subset's partition from the DP instead of
 //      searching it again;
 //   5. lane 0: the next round's levels (treelet_dp.wgsl).
@@ -152,11 +154,13 @@ fn optimize_treelet_team(root: u32, has_treelet: bool, team: u32, lane: u32) {
     var full_best = F32_MAX;
     for (var k = 2u; k <= m; k++) {
         let count = binomial(m, k);
-        // Lanes per subset: the largest power of two with count * L <= TEAM_LANES, at least 1.
-        let per_subset = 1u << firstLeadingBit(max(TEAM_LANES / count, 1u));
-        let side_by_side = TEAM_LANES / per_subset;
-        let group = lane / per_subset;
-        let turn = lane % per_subset;
+        // Lanes per subset, 2^b: the largest power of two with count * L <= TEAM_LANES, at least
+        // 1, and at most the subset's 2^(k-1) - 1 partitions (rounded up).
+        let b = min(firstLeadingBit(max(TEAM_LANES / count, 1u)), k - 1u);
+        let per_subset = 1u << b;
+        let side_by_side = TEAM_LANES >> b;
+        let group = lane >> b;
+        let turn = lane & (per_subset - 1u);
         let first = subsets_of_size(k);
         for (var done = 0u; done < count; done += side_by_side) {
             let index = done + group;
@@ -166,22 +170,29 @@ fn optimize_treelet_team(root: u32, has_treelet: bool, team: u32, lane: u32) {
             var s = 0u;
             if valid {
                 s = subset_order[first + index];
-                // P over the non-empty subsets of S without its lowest bit, in increasing order
-                // (treelet_dp.wgsl's best_partition); this lane takes every per_subset-th.
+                // P over the non-empty subsets of S without its lowest bit (treelet_dp.wgsl's
+                // best_partition). This lane's: the b lowest of those bits set as the bits of
+                // `turn`, the others (`high`) over all their subsets, in increasing order.
                 let delta = (s - 1u) & s;
-                var p = (0u - delta) & s;
-                var rank = 0u;
+                var high = delta;
+                var fixed = 0u;
+                for (var j = 0u; j < b; j++) {
+                    let bit = high & (0u - high);
+                    fixed |= select(0u, bit, ((turn >> j) & 1u) != 0u);
+                    high ^= bit;
+                }
+                var h = 0u;
                 loop {
-                    if rank % per_subset == turn {
+                    let p = fixed | h;
+                    if p != 0u {
                         let c = team_cost[subsets + p] + team_cost[subsets + (s ^ p)];
                         if c < best {
                             best = c;
                             best_p = p;
                         }
                     }
-                    rank++;
-                    p = (p - delta) & s;
-                    if p == 0u {
+                    h = (h - high) & high;
+                    if h == 0u {
                         break;
                     }
                 }
