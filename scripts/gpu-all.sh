@@ -106,7 +106,7 @@ step layouts 80 env SCENES="conference crytek_sponza sibenik lost_empire armadil
 # question the last GPU left open (README, "On an NVIDIA H200, second session"). LEVELS adds the
 # sweep of levels dispatched.
 step schedules 150 env SCENES="${SCHEDULE_SCENES:-conference crytek_sponza sibenik field:707 field:2000}" \
-  LEVELS="${LEVELS:-}" TEAMS="${TEAMS:-32,256}" CLIMBS=" " REPEATS=11 bash scripts/gpu-schedules.sh
+  LEVELS="${LEVELS:-}" TEAMS="${TEAMS:-4,8,16,32,256}" CLIMBS=" " REPEATS=11 bash scripts/gpu-schedules.sh
 if ls .gpu/variant-*.xz > /dev/null 2>&1; then
   step variants 150 env TREELET=$TREELET bash scripts/gpu-variants.sh run
 fi
