@@ -58,9 +58,10 @@ const GATHER_STACK: u32 = MAX_GPU_LEAF_SIZE;
 
 // With references: the triangles under output leaf `root` depth-first (left first), each once;
 // stores each working leaf's slot and returns the number of triangles. Working leaves hold one
-// reference each (the LBVH's leaves, which the rounds keep), output leaves at most
-// MAX_GPU_LEAF_SIZE (the collapse's max leaf size limit).
-fn gather_references(root: u32) -> u32 {
+// reference each and keep their LBVH places (the rounds reuse internal nodes only): leaf j is
+// node first_leaf + j (first_leaf = n - 1), so the walk loads internal nodes only. Output leaves
+// hold at most MAX_GPU_LEAF_SIZE references (the collapse's max leaf size limit).
+fn gather_references(root: u32, first_leaf: u32) -> u32 {
     var triangles: array<u32, MAX_GPU_LEAF_SIZE>;
     var count = 0u;
     var stack: array<u32, GATHER_STACK>;
@@ -68,9 +69,10 @@ fn gather_references(root: u32) -> u32 {
     stack[0] = root;
     while sp > 0u {
         sp--;
-        let n = nodes[stack[sp]];
-        if (n.right_or_count & LEAF_FLAG) != 0u {
-            let triangle = ref_tris[prim_indices[n.left_or_first]];
+        let node = stack[sp];
+        if node >= first_leaf {
+            let leaf = node - first_leaf;
+            let triangle = ref_tris[prim_indices[leaf]];
             var fresh = count < MAX_GPU_LEAF_SIZE;
             for (var j = 0u; j < count; j++) {
                 fresh = fresh && triangles[j] != triangle;
@@ -81,9 +83,10 @@ fn gather_references(root: u32) -> u32 {
                 slot = count;
                 count++;
             }
-            leaf_slots[n.left_or_first] = vec2<u32>(root, slot);
+            leaf_slots[leaf] = vec2<u32>(root, slot);
         } else if sp + 2u <= GATHER_STACK {
             // Right first on the stack, so the left subtree is gathered first.
+            let n = nodes[node];
             stack[sp] = n.right_or_count;
             stack[sp + 1u] = n.left_or_first;
             sp += 2u;
@@ -154,7 +157,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if leaf {
         // Not a select: WGSL evaluates both of its arguments, and the gather walks the subtree.
         if params.has_refs != 0u {
-            prims = gather_references(i);
+            prims = gather_references(i, min(params.leaf_count, count_limit[0]) - 1u);
         } else {
             prims = prim_counts[i];
         }

@@ -390,17 +390,40 @@ fn trbvh_split_trees_are_valid_and_hits_equal_brute_force() {
         let hits = closest_hits(gpu(), &geometry, &tree, &plain).unwrap();
         assert_hits_match(&scene.triangles, &rays, &hits);
         // The GPU collapse of the GPU's own working tree equals the CPU twin's exactly: unique
-        // triangles per leaf, in depth-first order of first occurrence.
-        let stages = builder.build_stages(gpu(), &geometry).unwrap();
-        let ref_tris = stages.ref_tris.as_deref().expect("pre-split references");
-        assert_eq!(
-            stages.bvh,
-            stages
-                .working
-                .collapse(&CostModel::from(&sah), Some(ref_tris)),
-            "{}: collapsed tree",
+        // triangles per leaf, in depth-first order of first occurrence. Leaves of up to 8
+        // references are gathered in registers, larger ones with a stack: both (a costly
+        // traversal step makes large leaves), and leaves of one reference.
+        let mut largest_leaf = 0;
+        for (ci, max_leaf_size) in [
+            (sah.ci, sah.max_leaf_size),
+            (sah.ci, 1),
+            (sah.ci, 3),
+            (8.0, 20),
+        ] {
+            builder.sah = SahParams {
+                ci,
+                max_leaf_size,
+                ..sah
+            };
+            let stages = builder.build_stages(gpu(), &geometry).unwrap();
+            let ref_tris = stages.ref_tris.as_deref().expect("pre-split references");
+            assert_eq!(
+                stages.bvh,
+                stages
+                    .working
+                    .collapse(&CostModel::from(&builder.sah), Some(ref_tris)),
+                "{}, Ci {ci}, max leaf size {max_leaf_size}: collapsed tree",
+                scene.name
+            );
+            let leaves = stages.bvh.nodes.iter().filter(|n| n.is_leaf());
+            largest_leaf = leaves.map(|n| n.prim_count()).fold(largest_leaf, u32::max);
+        }
+        assert!(
+            largest_leaf > 8,
+            "{}: no leaf gathered with the stack",
             scene.name
         );
+        builder.sah = sah;
     }
 }
 
