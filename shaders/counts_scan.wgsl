@@ -1,6 +1,6 @@
 // Exclusive prefix sum of `sort::PrefixScan` in one dispatch (reduce-then-scan, no waiting): each
 // workgroup scans its block of SCAN_BLOCK = 4096 u32s of `data` in place (16 consecutive per
-// invocation, then a Hillis-Steele scan of the 256 invocation totals in workgroup memory) and
+// invocation, then a scan of the 256 invocation totals in workgroup memory: workgroup_scan.wgsl) and
 // stores the block's total in `block_sums`; the workgroup that finishes last (a ticket counter,
 // as in Merrill & Grimshaw's reduce-then-scan, but without any workgroup waiting for another)
 // scans the block totals of every column in place, 4096 at a time with a carry, which leaves
@@ -8,6 +8,7 @@
 // offset where it reads, or counts_add.wgsl adds it back. Every column of `data` is scanned on
 // its own (scan_blocks.wgsl).
 #include "scan_blocks.wgsl"
+#include "workgroup_scan.wgsl"
 
 const WORKGROUP: u32 = 256u;
 const ITEMS: u32 = SCAN_BLOCK / WORKGROUP;
@@ -21,11 +22,6 @@ const ITEMS: u32 = SCAN_BLOCK / WORKGROUP;
 // Workgroups finished so far; zero before and after the dispatch.
 @group(0) @binding(4) var<storage, read_write> ticket: array<atomic<u32>>;
 
-// GROUPS² = WORKGROUP.
-const GROUPS: u32 = 16u;
-
-var<workgroup> partial: array<u32, 256>;
-var<workgroup> group_totals: array<u32, GROUPS>;
 var<workgroup> is_last: u32;
 
 // Element i of the column starting at `start`.
@@ -40,36 +36,6 @@ fn store(start: u32, i: u32, x: u32) {
     if i < params.len {
         data[start + i] = x;
     }
-}
-
-// The workgroup's exclusive scan of the invocations' `total`s: (this invocation's prefix, the
-// sum of all). Every invocation calls it. Three barriers (a Hillis-Steele scan takes two per
-// step, 16 for 256 invocations, and a barrier is what a workgroup pays most for on a CPU
-// device): GROUPS invocations each scan a group of GROUPS totals serially, then every invocation
-// adds the totals of the groups before its own.
-fn workgroup_scan(lid: u32, total: u32) -> vec2<u32> {
-    partial[lid] = total;
-    workgroupBarrier();
-    if lid < GROUPS {
-        var run = 0u;
-        for (var k = 0u; k < GROUPS; k++) {
-            let x = partial[lid * GROUPS + k];
-            partial[lid * GROUPS + k] = run;
-            run += x;
-        }
-        group_totals[lid] = run;
-    }
-    workgroupBarrier();
-    var before = partial[lid];
-    var all = 0u;
-    for (var g = 0u; g < GROUPS; g++) {
-        let t = group_totals[g];
-        before += select(0u, t, g < lid / GROUPS);
-        all += t;
-    }
-    // Before `partial` is written again.
-    workgroupBarrier();
-    return vec2<u32>(before, all);
 }
 
 // The last workgroup: every column's block totals scanned in place, SCAN_BLOCK at a time.

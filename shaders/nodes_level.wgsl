@@ -165,9 +165,10 @@ fn bucket_internal_node(j: u32, n: u32, lid: u32) {
     bucket_together(j, level, lid);
 }
 
-// The last workgroup: each dispatched level's indirect arguments, from its root count.
-fn write_dispatch_args() {
-    for (var level = 1u; level <= params.level_dispatches; level++) {
+// The last workgroup: each dispatched level's indirect arguments, from its root count, the
+// levels spread over the invocations (so that none waits for the counts one after another).
+fn write_dispatch_args(lid: u32) {
+    for (var level = lid + 1u; level <= params.level_dispatches; level += WORKGROUP_WIDTH) {
         let size = atomicLoad(&schedule[level - 1u]);
         let groups = select((size + OPTIMIZE_WORKGROUP - 1u) / OPTIMIZE_WORKGROUP, size, size < params.team_below);
         let y = (groups + MAX_WORKGROUPS_X - 1u) / MAX_WORKGROUPS_X;
@@ -247,7 +248,5 @@ fn main(
     }
     // Acquire: every workgroup's counts are visible.
     storageBarrier();
-    if lid == 0u {
-        write_dispatch_args();
-    }
+    write_dispatch_args(lid);
 }

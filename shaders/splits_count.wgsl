@@ -8,6 +8,7 @@
 // each further one up to the count at the last candidate to the bin its binary search over the
 // candidates finds. The sum at candidate j is then the count of bins 0..=j.
 #include "splits_search.wgsl"
+#include "workgroup_scan.wgsl"
 
 const WORKGROUP: u32 = 256u;
 // The binary search's first stride: the highest power of two of SPLIT_SEARCH_CANDIDATES.
@@ -34,25 +35,35 @@ fn first_fitting(lo: u32, hi: u32, q: f32, k: u32) -> u32 {
     return j;
 }
 
-// The last workgroup of step `step`: the interval after it, from the step's histogram (the gap
-// after the last candidate whose sum fits the budget).
-fn narrow(step: u32) {
+// The last workgroup of step `step`, every invocation: the interval after it, from the step's
+// histogram: the gap after the last candidate whose sum fits the budget, [c(J - 1), c(J)) for the
+// first candidate J that does not fit (c(-1) = lo, c(CANDIDATES) = hi). Invocation j loads bin j,
+// a workgroup scan gives the sums (so no invocation waits for the bins one after another), and
+// the one invocation at the gap stores it: j = J, or the last candidate when all fit.
+fn narrow(step: u32, lid: u32) {
     let lo = interval.x;
     let hi = interval.y;
-    var new_lo = lo;
-    var new_hi = hi;
-    var sum = 0u;
-    for (var j = 0u; j < SPLIT_SEARCH_CANDIDATES; j++) {
-        sum += atomicLoad(&budget_state[STEP_BINS + step * SPLIT_SEARCH_CANDIDATES + j]);
-        let c = candidate(lo, hi, j);
-        if sum <= params.budget {
-            new_lo = c;
-        } else if new_hi == hi {
-            new_hi = c;
-        }
+    var bin = 0u;
+    if lid < SPLIT_SEARCH_CANDIDATES {
+        bin = atomicLoad(&budget_state[STEP_BINS + step * SPLIT_SEARCH_CANDIDATES + lid]);
     }
-    atomicStore(&budget_state[STEP_INTERVALS + 2u * step], new_lo);
-    atomicStore(&budget_state[STEP_INTERVALS + 2u * step + 1u], new_hi);
+    // The sums at candidates lid - 1 and lid (sums grow with j).
+    let before = workgroup_scan(lid, bin).x;
+    let fits = before + bin <= params.budget;
+    let last = SPLIT_SEARCH_CANDIDATES - 1u;
+    var gap = vec2<u32>(0u);
+    var at_gap = false;
+    if lid < SPLIT_SEARCH_CANDIDATES && !fits && before <= params.budget {
+        gap = vec2<u32>(select(lo, candidate(lo, hi, lid - 1u), lid > 0u), candidate(lo, hi, lid));
+        at_gap = true;
+    } else if lid == last && fits {
+        gap = vec2<u32>(candidate(lo, hi, last), hi);
+        at_gap = true;
+    }
+    if at_gap {
+        atomicStore(&budget_state[STEP_INTERVALS + 2u * step], gap.x);
+        atomicStore(&budget_state[STEP_INTERVALS + 2u * step + 1u], gap.y);
+    }
 }
 
 @compute @workgroup_size(WORKGROUP)
@@ -106,7 +117,5 @@ fn main(
     }
     // Acquire: every workgroup's counts are visible.
     storageBarrier();
-    if lid == 0u {
-        narrow(params.step);
-    }
+    narrow(params.step, lid);
 }

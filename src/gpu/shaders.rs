@@ -57,6 +57,10 @@ const INCLUDES: &[(&str, &str)] = &[
         include_str!("../../shaders/include/scan_blocks.wgsl"),
     ),
     (
+        "workgroup_scan.wgsl",
+        include_str!("../../shaders/include/workgroup_scan.wgsl"),
+    ),
+    (
         "splits_search.wgsl",
         include_str!("../../shaders/include/splits_search.wgsl"),
     ),
