@@ -1,7 +1,9 @@
 //! CPU twin of the GPU treelet pipeline: the working tree (Karras layout with parent links,
 //! primitive counts and SAH costs), one restructuring round (Karras & Aila 2013, §3-4) processed in
 //! post-order exactly as the GPU's bottom-up climb processes it, and the leaf collapse with
-//! compaction. Same float operations in the same order as the kernels.
+//! compaction. Same float operations in the same order as the kernels. Also the rounds overlapped
+//! in waves (`optimize_overlapped`), a schedule the GPU does not run yet: how far a round can run
+//! ahead of the one before without changing the trees.
 
 use glam::Vec3;
 
@@ -60,28 +62,120 @@ impl WorkingTree {
     /// `gamma` primitives root a treelet of up to `treelet_size` leaves that is replaced by its
     /// SAH-optimal topology when that is cheaper.
     pub fn optimize_round(&mut self, model: &CostModel, treelet_size: u32, gamma: u32) {
+        self.leaf_costs(model);
+        for node in self.post_order() {
+            self.finish_node(node, model);
+            if self.prim_counts[node as usize] >= gamma {
+                self.optimize_treelet(node, model, treelet_size);
+            }
+        }
+    }
+
+    /// Every leaf's count (1) and cost (Ct·A).
+    fn leaf_costs(&mut self, model: &CostModel) {
         for (i, n) in self.nodes.iter().enumerate() {
             if n.is_leaf() {
                 self.prim_counts[i] = 1;
                 self.costs[i] = model.ct * surface_area(Vec3::from(n.min), Vec3::from(n.max));
             }
         }
-        for node in self.post_order() {
-            let (l, r) = self.nodes[node as usize].children();
-            let prims = self.prim_counts[l as usize] + self.prim_counts[r as usize];
-            self.prim_counts[node as usize] = prims;
-            self.costs[node as usize] = model.combine(
-                self.area(node),
-                prims,
-                self.costs[l as usize] + self.costs[r as usize],
-            );
-            if prims >= gamma {
-                self.optimize_treelet(node, model, treelet_size);
-            }
-        }
     }
 
-    fn optimize_treelet(&mut self, root: u32, model: &CostModel, treelet_size: u32) {
+    /// An internal node's count and cost from its children's.
+    fn finish_node(&mut self, node: u32, model: &CostModel) {
+        let (l, r) = self.nodes[node as usize].children();
+        let prims = self.prim_counts[l as usize] + self.prim_counts[r as usize];
+        self.prim_counts[node as usize] = prims;
+        self.costs[node as usize] = model.combine(
+            self.area(node),
+            prims,
+            self.costs[l as usize] + self.costs[r as usize],
+        );
+    }
+
+    /// The rounds of `gammas` overlapped in waves (a study of the schedule; the GPU runs the
+    /// rounds one after another). In wave w, round 1 optimizes its roots of treelet level w, and
+    /// round r > 1 every root Q of at least γ_r primitives whose children of at least γ_r are
+    /// done in round r, and which, with its ancestors up to `reach` levels up, is done in round
+    /// r − 1 (`None`: all of them, so each round waits for the whole round before: the
+    /// sequential rounds, one wave per treelet level). A wave's treelets are disjoint (a treelet
+    /// spans six levels at most), so their order does not matter. Internal nodes a treelet
+    /// rewrites count as done in its round and the ones before (their sequential visit came
+    /// first). Returns the treelets optimized in each wave: as many waves as a GPU schedule would
+    /// have dependent steps. Counts and costs are computed afresh before and after.
+    ///
+    /// Not exact in general: a write-back can lift a treelet leaf to just below its root, so the
+    /// next ancestor's treelet may reach a node that round r already optimized. On the shared
+    /// scenes, reach 6 gives the sequential trees exactly (`examples/rounds_overlap.rs`).
+    pub fn optimize_overlapped(
+        &mut self,
+        model: &CostModel,
+        treelet_size: u32,
+        gammas: &[u32],
+        reach: Option<u32>,
+    ) -> Vec<u32> {
+        let count = self.nodes.len();
+        self.leaf_costs(model);
+        let order = self.post_order();
+        let mut waves = Waves {
+            gammas,
+            reach,
+            level: vec![0; count],
+            done: vec![0; count * gammas.len()],
+        };
+        for &node in &order {
+            self.finish_node(node, model);
+            if self.prim_counts[node as usize] >= gammas[0] {
+                let (l, r) = self.nodes[node as usize].children();
+                waves.level[node as usize] =
+                    1 + waves.level[l as usize].max(waves.level[r as usize]);
+            }
+        }
+        let mut sizes = Vec::new();
+        loop {
+            let wave = sizes.len() as u32 + 1;
+            let mut ops = Vec::new();
+            for &node in &order {
+                for round in 0..gammas.len() {
+                    if waves.ready(self, node, round, wave) {
+                        ops.push((round, node));
+                    }
+                }
+            }
+            if ops.is_empty() {
+                break;
+            }
+            sizes.push(ops.len() as u32);
+            ops.sort_unstable();
+            for (round, node) in ops {
+                self.finish_node(node, model);
+                for x in self.optimize_treelet(node, model, treelet_size) {
+                    for r in 0..=round {
+                        waves.mark(x, r, wave);
+                    }
+                }
+                waves.mark(node, round, wave);
+            }
+        }
+        for node in order {
+            for (round, &gamma) in gammas.iter().enumerate() {
+                assert!(
+                    self.prim_counts[node as usize] < gamma || waves.is_done(node, round, u32::MAX),
+                    "overlapped rounds stalled after {} waves: node {node}, round {round}",
+                    sizes.len()
+                );
+            }
+        }
+        self.leaf_costs(model);
+        for node in self.post_order() {
+            self.finish_node(node, model);
+        }
+        sizes
+    }
+
+    /// Optimizes the treelet at `root`; returns the internal nodes it rewrote (none when the
+    /// topology is kept).
+    fn optimize_treelet(&mut self, root: u32, model: &CostModel, treelet_size: u32) -> Vec<u32> {
         let (l, r) = self.nodes[root as usize].children();
         let mut leaves = vec![l, r];
         let mut internal = vec![root];
@@ -105,7 +199,7 @@ impl WorkingTree {
             internal.push(expanded);
         }
         if leaves.len() < 3 {
-            return;
+            return Vec::new();
         }
         let treelet: Vec<TreeletLeaf> = leaves
             .iter()
@@ -121,7 +215,7 @@ impl WorkingTree {
             .collect();
         let sol = solve_treelet(&treelet, model);
         if sol.cost[sol.full() as usize] >= self.costs[root as usize] {
-            return;
+            return Vec::new();
         }
         // Write back breadth-first, left = P, right = S \ P, reusing internal nodes in order.
         let mut queue = std::collections::VecDeque::from([(sol.full(), root)]);
@@ -150,6 +244,7 @@ impl WorkingTree {
             self.prim_counts[node as usize] = sol.prims[s as usize];
             self.costs[node as usize] = sol.cost[s as usize];
         }
+        internal.split_off(1)
     }
 
     /// Whether `node` becomes (or is inside) a leaf: a leaf already, or Ct·A·N <= C with
@@ -241,6 +336,65 @@ impl WorkingTree {
         Bvh {
             nodes,
             prim_indices,
+        }
+    }
+}
+
+/// The schedule of `WorkingTree::optimize_overlapped`.
+struct Waves<'a> {
+    gammas: &'a [u32],
+    reach: Option<u32>,
+    /// Round 1's treelet level of each node: the wave that optimizes it.
+    level: Vec<u32>,
+    /// The wave in which each node was done in each round (0: not yet), node-major.
+    done: Vec<u32>,
+}
+
+impl Waves<'_> {
+    /// Whether `node` was done in `round` before wave `wave`.
+    fn is_done(&self, node: u32, round: usize, wave: u32) -> bool {
+        let d = self.done[node as usize * self.gammas.len() + round];
+        d != 0 && d < wave
+    }
+
+    /// Records `node` as done in `round` in wave `wave`, unless it was already.
+    fn mark(&mut self, node: u32, round: usize, wave: u32) {
+        let d = &mut self.done[node as usize * self.gammas.len() + round];
+        if *d == 0 {
+            *d = wave;
+        }
+    }
+
+    /// Whether wave `wave` optimizes `node` in `round` (see `optimize_overlapped`).
+    fn ready(&self, tree: &WorkingTree, node: u32, round: usize, wave: u32) -> bool {
+        let gamma = self.gammas[round];
+        let n = tree.nodes[node as usize];
+        if n.is_leaf()
+            || self.done[node as usize * self.gammas.len() + round] != 0
+            || tree.prim_counts[node as usize] < gamma
+        {
+            return false;
+        }
+        if round == 0 {
+            return self.level[node as usize] == wave;
+        }
+        let (l, r) = n.children();
+        let children_done = [l, r].into_iter().all(|c| {
+            tree.nodes[c as usize].is_leaf()
+                || tree.prim_counts[c as usize] < gamma
+                || self.is_done(c, round, wave)
+        });
+        let mut x = node;
+        let mut up = 0;
+        loop {
+            if !self.is_done(x, round - 1, wave) {
+                return false;
+            }
+            if x == 0 || self.reach.is_some_and(|reach| up >= reach) {
+                return children_done;
+            }
+            x = tree.parents[x as usize];
+            up += 1;
         }
     }
 }

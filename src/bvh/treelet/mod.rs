@@ -127,7 +127,7 @@ impl TreeletSettings {
     }
 
     /// γ of each round; a single cost-only pass (no treelets) when `rounds` is 0.
-    fn gammas(&self) -> Vec<u32> {
+    pub fn gammas(&self) -> Vec<u32> {
         if self.rounds == 0 {
             return vec![u32::MAX];
         }
