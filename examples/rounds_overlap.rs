@@ -7,7 +7,7 @@
 //! sequential one.
 //!
 //! ```text
-//! cargo run --release --example rounds_overlap -- conference,sibenik 6,4,2
+//! cargo run --release --example rounds_overlap -- conference,sibenik 6,4,2 [balanced|high]
 //! ```
 use treelet::bvh::lbvh::{build_lbvh_from_boxes_cpu, prim_boxes_cpu, TRBVH_KEY_BITS};
 use treelet::bvh::treelet::{CostModel, TreeletSettings, WorkingTree};
@@ -23,9 +23,9 @@ fn main() -> treelet::Result<()> {
         .split(',')
         .filter_map(|r| r.parse().ok())
         .collect();
+    let settings = TreeletSettings::preset(&args.next().unwrap_or_else(|| "balanced".into()))?;
     let sah = SahParams::default();
     let model = CostModel::from(&sah);
-    let settings = TreeletSettings::BALANCED;
     let gammas = settings.gammas();
     println!("scene            reach  waves  >128  SAH          vs sequential  same tree");
     let wide = |sizes: &[u32]| sizes.iter().filter(|&&n| n > 128).count();
