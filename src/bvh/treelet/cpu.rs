@@ -94,10 +94,10 @@ impl WorkingTree {
     }
 
     /// The rounds of `gammas` overlapped in waves (a study of the schedule; the GPU runs the
-    /// rounds one after another). In wave w, round 1 optimizes its roots of treelet level w, and
-    /// round r > 1 every root Q of at least γ_r primitives whose children of at least γ_r are
-    /// done in round r, and which, with its ancestors up to `reach` levels up, is done in round
-    /// r − 1 (`None`: all of them, so each round waits for the whole round before: the
+    /// rounds one after another). In each wave, round r optimizes every root Q of at least γ_r
+    /// primitives whose children of at least γ_r are done in round r (so round 1 its roots of
+    /// treelet level w in wave w) and, for r > 1, which with its ancestors up to `reach` levels
+    /// up is done in round r − 1 (`None`: all of them, so each round waits for the whole round before: the
     /// sequential rounds, one wave per treelet level). A wave's treelets are disjoint (a treelet
     /// spans six levels at most), so their order does not matter. Internal nodes a treelet
     /// rewrites count as done in its round and the ones before (their sequential visit came
@@ -120,16 +120,10 @@ impl WorkingTree {
         let mut waves = Waves {
             gammas,
             reach,
-            level: vec![0; count],
             done: vec![0; count * gammas.len()],
         };
         for &node in &order {
             self.finish_node(node, model);
-            if self.prim_counts[node as usize] >= gammas[0] {
-                let (l, r) = self.nodes[node as usize].children();
-                waves.level[node as usize] =
-                    1 + waves.level[l as usize].max(waves.level[r as usize]);
-            }
         }
         let mut sizes = Vec::new();
         loop {
@@ -344,8 +338,6 @@ impl WorkingTree {
 struct Waves<'a> {
     gammas: &'a [u32],
     reach: Option<u32>,
-    /// Round 1's treelet level of each node: the wave that optimizes it.
-    level: Vec<u32>,
     /// The wave in which each node was done in each round (0: not yet), node-major.
     done: Vec<u32>,
 }
@@ -375,15 +367,15 @@ impl Waves<'_> {
         {
             return false;
         }
-        if round == 0 {
-            return self.level[node as usize] == wave;
-        }
         let (l, r) = n.children();
         let children_done = [l, r].into_iter().all(|c| {
             tree.nodes[c as usize].is_leaf()
                 || tree.prim_counts[c as usize] < gamma
                 || self.is_done(c, round, wave)
         });
+        if round == 0 {
+            return children_done;
+        }
         let mut x = node;
         let mut up = 0;
         loop {
