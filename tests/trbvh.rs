@@ -447,6 +447,7 @@ fn teams_lone_invocations_and_dp_forms_build_the_same_tree() {
                     team_below: Some(below),
                     dp: Some(dp),
                     climb_dp: Some(climb_dp),
+                    overlap: None,
                 });
                 trees.push(builder.build_stages(gpu(), &geometry).unwrap());
             }
@@ -566,6 +567,62 @@ fn overlapped_rounds_keep_the_sequential_trees() {
         let sequential = optimize_lbvh_cpu(start.clone(), &settings, &model);
         assert_eq!(overlapped(&start, Some(6)).0.nodes, sequential.nodes);
     }
+}
+
+/// The GPU's overlapped rounds (`RoundSchedule::overlap`, kernels `waves_*`) build what the CPU
+/// twin's do (`WorkingTree::optimize_overlapped` from the GPU's own LBVH), with every wave
+/// dispatched up to the default count, with none (all in the climb's workgroup) and with one;
+/// on these inputs that is the sequential rounds' tree exactly (as the twin's test observes).
+/// Small and degenerate inputs too, and the high preset (four rounds of 8 leaves).
+#[test]
+fn overlapped_rounds_on_the_gpu_equal_the_cpu_twin() {
+    let builder =
+        &mut TrbvhBuilder::new(gpu(), TreeletSettings::BALANCED, SahParams::default()).unwrap();
+    let model = CostModel::from(&builder.sah);
+    let t = Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y, 0);
+    let inputs = [
+        (random_soup(3000, 49), TreeletSettings::BALANCED),
+        (
+            load_scene("field-10k").unwrap().triangles,
+            TreeletSettings::BALANCED,
+        ),
+        (
+            load_scene("field-10k").unwrap().triangles,
+            TreeletSettings::HIGH_QUALITY,
+        ),
+        (random_soup(1, 1), TreeletSettings::BALANCED),
+        (random_soup(9, 9), TreeletSettings::BALANCED),
+        (vec![t; 500], TreeletSettings::BALANCED),
+    ];
+    for (triangles, settings) in inputs {
+        builder.settings = settings;
+        let scene = scene_of(triangles);
+        let geometry = Geometry::upload(gpu(), &scene).unwrap();
+        builder.set_schedule(RoundSchedule::default());
+        let sequential = builder.build_stages(gpu(), &geometry).unwrap();
+        for levels in [None, Some(0), Some(1)] {
+            builder.set_schedule(RoundSchedule {
+                level_dispatches: levels,
+                overlap: Some(6),
+                ..RoundSchedule::default()
+            });
+            let stages = builder.build_stages(gpu(), &geometry).unwrap();
+            let what = format!(
+                "{} triangles, {settings:?}, level dispatches {levels:?}",
+                scene.triangles.len()
+            );
+            let mut cpu = stages.lbvh.clone();
+            cpu.optimize_overlapped(&model, settings.treelet_size, &settings.gammas(), Some(6));
+            assert_optimizer_agrees(&stages.working, &cpu, &builder.sah);
+            assert!(
+                stages.working == sequential.working,
+                "{what}: not the sequential rounds' tree"
+            );
+            assert_eq!(stages.bvh, sequential.bvh, "{what}: collapsed tree");
+            validate(&stages.bvh, &scene.triangles).expect("valid TRBVH");
+        }
+    }
+    builder.set_schedule(RoundSchedule::default());
 }
 
 #[test]

@@ -34,9 +34,11 @@ struct RoundParams {
     // level_start(level), computed by the CPU (treelets_optimize: the level dispatched;
     // treelets_climb: level_dispatches + 1).
     level_first: u32,
-    pad0: u32,
-    pad1: u32,
-    pad2: u32,
+    // The overlapped rounds (treelet_waves.wgsl): how many, the reach and the wave a dispatch
+    // processes (the first for the climb); 0 elsewhere.
+    rounds: u32,
+    reach: u32,
+    wave: u32,
 }
 
 // The schedule buffer (u32 words): per level L = 1 ..= MAX_LEVEL_DISPATCHES + 1, the number of

@@ -69,6 +69,12 @@ pub struct BenchArgs {
     /// as --treelet-dp); a comma-separated list to compare. The tree is the same for both
     #[arg(long, value_delimiter = ',', value_enum)]
     climb_dp: Vec<DpForm>,
+    /// The treelet rounds overlapped in waves: each round starts on a root once it and its
+    /// ancestors this many levels up are done in the round before (6: the trees of the rounds
+    /// one after another on every scene measured; README, "Rounds can overlap"), or none (the
+    /// default: one round after another); trbvh, trbvh-split; a comma-separated list to compare
+    #[arg(long, value_delimiter = ',')]
+    round_overlap: Vec<Reach>,
     /// Levels of the wide conversion below the root's dispatch given an indirect dispatch of
     /// their own, 0-32, the deeper ones emitted by one workgroup (wide layout; default: log2 of
     /// the references + 2 on GPUs); a comma-separated list to compare. The tree is the same for
@@ -107,6 +113,24 @@ impl From<DpForm> for TreeletDp {
     }
 }
 
+/// A `--round-overlap` value: a reach, or none.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Reach(Option<u32>);
+
+impl std::str::FromStr for Reach {
+    type Err = String;
+
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s {
+            "none" => Ok(Self(None)),
+            _ => s
+                .parse()
+                .map(|reach| Self(Some(reach)))
+                .map_err(|_| format!("'{s}' is neither a number of levels nor none")),
+        }
+    }
+}
+
 impl BenchArgs {
     /// Every combination of the requested round schedules (the default where none is given);
     /// fails when one is given but no builder has treelets to schedule.
@@ -118,19 +142,27 @@ impl BenchArgs {
                 ("--team-below", !self.team_below.is_empty()),
                 ("--treelet-dp", !self.treelet_dp.is_empty()),
                 ("--climb-dp", !self.climb_dp.is_empty()),
+                ("--round-overlap", !self.round_overlap.is_empty()),
             ],
         )?;
+        let overlaps = match self.round_overlap.as_slice() {
+            [] => vec![None],
+            reaches => reaches.iter().map(|r| r.0).collect(),
+        };
         let mut schedules = Vec::new();
         for level_dispatches in or_default(&self.level_dispatches) {
             for team_below in or_default(&self.team_below) {
                 for dp in or_default(&self.treelet_dp) {
                     for climb_dp in or_default(&self.climb_dp) {
-                        schedules.push(RoundSchedule {
-                            level_dispatches,
-                            team_below,
-                            dp: dp.map(TreeletDp::from),
-                            climb_dp: climb_dp.map(TreeletDp::from),
-                        });
+                        for &overlap in &overlaps {
+                            schedules.push(RoundSchedule {
+                                level_dispatches,
+                                team_below,
+                                dp: dp.map(TreeletDp::from),
+                                climb_dp: climb_dp.map(TreeletDp::from),
+                                overlap,
+                            });
+                        }
                     }
                 }
             }
@@ -187,6 +219,9 @@ struct BenchRecord {
     /// (`--treelet-dp`) and in the climb (`--climb-dp`).
     treelet_dp: Option<&'static str>,
     climb_dp: Option<&'static str>,
+    /// Treelet builders: the rounds' overlap reach (`--round-overlap`; null: one round after
+    /// another).
+    round_overlap: Option<u32>,
     /// The radix sort's keys per invocation asked for (null: chosen per sort).
     sort_tile_items: Option<u32>,
     /// The climbs' workgroup width in effect.
@@ -420,6 +455,7 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
             climb_dp: builder
                 .treelet_settings()
                 .map(|_| schedule.climb_dp().name()),
+            round_overlap: schedule.overlap,
             sort_tile_items: gpu.sort_tile_items,
             climb_width: gpu.climb_width(),
             adapter: gpu.adapter_description(),
@@ -490,6 +526,9 @@ fn run_label(
     }
     if let Some(dp) = schedule.climb_dp {
         label += &format!(" climb-dp={}", dp.name());
+    }
+    if let Some(reach) = schedule.overlap {
+        label += &format!(" overlap={reach}");
     }
     match (layout, wide.level_dispatches) {
         (Layout::Binary, _) => format!("{label} binary"),

@@ -69,6 +69,14 @@ const INCLUDES: &[(&str, &str)] = &[
         include_str!("../../shaders/include/items.wgsl"),
     ),
     (
+        "treelet_waves.wgsl",
+        include_str!("../../shaders/include/treelet_waves.wgsl"),
+    ),
+    (
+        "treelet_wave_optimize.wgsl",
+        include_str!("../../shaders/include/treelet_wave_optimize.wgsl"),
+    ),
+    (
         "treelet_round.wgsl",
         include_str!("../../shaders/include/treelet_round.wgsl"),
     ),

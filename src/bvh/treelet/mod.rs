@@ -18,6 +18,7 @@ mod nodes_mark;
 mod rounds;
 mod treelets_climb;
 mod treelets_optimize;
+mod waves;
 
 pub use cpu::WorkingTree;
 pub use dp::{
@@ -28,6 +29,7 @@ pub use nodes_level::NODES_LEVEL;
 pub use nodes_mark::NODES_MARK;
 pub use treelets_climb::TREELETS_CLIMB;
 pub use treelets_optimize::TREELETS_OPTIMIZE;
+pub use waves::{WAVES_CLIMB, WAVES_FIND, WAVES_OPTIMIZE};
 
 pub use dp_unrolled::TreeletDp;
 pub use rounds::RoundSchedule;
@@ -38,6 +40,7 @@ pub use crate::gpu::constants::{
 
 use collapse::{Collapse, CollapseBuffers};
 use rounds::{Round, TreeletRounds, TreeletState, SCHEDULE_WORDS};
+use waves::{Overlap, OverlappedRounds};
 
 use super::lbvh::{
     build_lbvh_from_boxes_cpu, prim_boxes_cpu, LbvhBuilder, LbvhInput, LBVH_PASSES, TRBVH_KEY_BITS,
@@ -258,6 +261,8 @@ pub struct TrbvhBuilder {
     lbvh: LbvhBuilder,
     presplit: Option<PreSplitter>,
     rounds: TreeletRounds,
+    /// The rounds overlapped in waves (`RoundSchedule::overlap`).
+    waves: OverlappedRounds,
     collapse: Collapse,
     scratch: Option<Scratch>,
     /// Leaves the last build's working tree had room for.
@@ -277,6 +282,7 @@ impl TrbvhBuilder {
             lbvh: LbvhBuilder::new(ctx).with_key_bits(TRBVH_KEY_BITS)?,
             presplit: None,
             rounds: TreeletRounds::new(ctx)?,
+            waves: OverlappedRounds::new(ctx),
             collapse: Collapse::new(ctx)?,
             scratch: None,
             last_capacity: 0,
@@ -463,7 +469,42 @@ impl TrbvhBuilder {
             waves: &scratch.waves,
         };
         let model = CostModel::from(&self.sah);
-        for (r, &gamma) in gammas.iter().enumerate() {
+        let overlap = self
+            .rounds
+            .schedule
+            .overlap
+            .filter(|_| gammas[0] != u32::MAX);
+        if let Some(reach) = overlap {
+            // The first round's schedule (with the LBVH), then every round in waves.
+            rec.encoder().clear_buffer(&scratch.arrivals, 0, None);
+            rec.encoder().clear_buffer(&scratch.schedule, 0, None);
+            let rounds = gammas.len() as u32;
+            self.waves.reserve(ctx, n, rounds)?;
+            let round = Round {
+                model,
+                treelet_size: self.settings.treelet_size,
+                gamma: gammas[0],
+                next_gamma: u32::MAX,
+                levels_only: false,
+            };
+            let levels = self.rounds.dispatched(n, gammas[0], ctx.info.device_type);
+            let mut pass = rec.pass("treelets");
+            self.rounds
+                .record_levels(&mut pass, ctx, count, &state, &round, levels.max(1));
+            drop(pass);
+            let overlap = Overlap {
+                model,
+                treelet_size: self.settings.treelet_size,
+                rounds,
+                reach,
+                dispatched: levels * rounds,
+                dp: self.rounds.schedule.dp(),
+                climb_dp: self.rounds.schedule.climb_dp(),
+            };
+            self.waves
+                .record(rec, n, &state, self.rounds.roots(), &overlap);
+        }
+        for (r, &gamma) in gammas.iter().enumerate().filter(|_| overlap.is_none()) {
             if r == 0 {
                 // The first schedule's climb counts arrivals.
                 rec.encoder().clear_buffer(&scratch.arrivals, 0, None);

@@ -33,7 +33,7 @@ use super::treelets_climb::TREELETS_CLIMB;
 use super::treelets_optimize::TREELETS_OPTIMIZE;
 use crate::gpu::constants::{MAX_LEVEL_DISPATCHES, MAX_TREELET_SIZE, MIN_TREELET_SIZE};
 use crate::gpu::{
-    storage_buffer, storage_buffer_zeroed, GpuContext, Grid, ItemCount, Kernel, KernelDecl,
+    storage_buffer, storage_buffer_zeroed, GpuContext, Grid, ItemCount, Kernel, KernelDecl, Pass,
     Recorder,
 };
 use crate::Result;
@@ -61,21 +61,58 @@ pub struct RoundParams {
     /// level_dispatches + 1 for the climb). Computed here once, not by every workgroup from
     /// `level` − 1 divisions (a chain of dependent divisions before its first load).
     level_first: u32,
-    _pad: [u32; 3],
+    /// The overlapped rounds (`waves`): how many, the reach and the wave a dispatch processes
+    /// (the first for the climb); 0 elsewhere.
+    pub(crate) rounds: u32,
+    pub(crate) reach: u32,
+    pub(crate) wave: u32,
 }
 const _: () = assert!(std::mem::size_of::<RoundParams>() == 64);
+
+impl RoundParams {
+    /// The parameters of the overlapped rounds' kernels (`waves`) for a tree of `n` leaves:
+    /// `rounds` rounds of `treelet_size` leaves (γ_r = treelet_size · 2^r), the reach, wave
+    /// `wave`.
+    pub(crate) fn waves(
+        n: u32,
+        treelet_size: u32,
+        model: &CostModel,
+        rounds: u32,
+        reach: u32,
+        wave: u32,
+    ) -> Self {
+        Self {
+            count: n,
+            row_pitch: 0,
+            gamma: treelet_size,
+            max_leaf_size: model.max_leaf_size,
+            ci: model.ci,
+            ct: model.ct,
+            zero: 0,
+            level_dispatches: 0,
+            level: 0,
+            levels_only: 0,
+            team_below: 0,
+            next_gamma: u32::MAX,
+            level_first: 0,
+            rounds,
+            reach,
+            wave,
+        }
+    }
+}
 
 /// Words of the schedule buffer: the roots per level (levels 1 ..= MAX_LEVEL_DISPATCHES + 1), a
 /// ticket, then the indirect arguments (x, y, z) of each dispatched level.
 pub(crate) const SCHEDULE_WORDS: u64 = SCHEDULE_ARGS + 3 * MAX_LEVEL_DISPATCHES as u64;
 /// First word of the indirect arguments in the schedule buffer.
-const SCHEDULE_ARGS: u64 = MAX_LEVEL_DISPATCHES as u64 + 2;
+pub(crate) const SCHEDULE_ARGS: u64 = MAX_LEVEL_DISPATCHES as u64 + 2;
 
 /// First slot of level `level`'s roots in the roots buffer of a tree of `n` leaves and smallest
 /// root `gamma` (WGSL twin in `treelet_round.wgsl`): level l has ⌊n / (γ + l − 1)⌋ slots, as the
 /// roots of a level are disjoint subtrees and a root of level l holds at least γ + l − 1 leaves
 /// (γ, and one more than its child of level l − 1).
-fn level_start(n: u32, gamma: u32, level: u32) -> u64 {
+pub(crate) fn level_start(n: u32, gamma: u32, level: u32) -> u64 {
     (1..level)
         .map(|l| u64::from(n / gamma.saturating_add(l - 1)))
         .sum()
@@ -165,6 +202,11 @@ pub struct RoundSchedule {
     /// How it is written in the climb (`treelets_climb`: the top levels, a few treelets per
     /// wave, where one treelet's latency is the wave's); None: as in the dispatched levels.
     pub climb_dp: Option<TreeletDp>,
+    /// The rounds overlapped in waves with this reach (`waves`, the GPU twin of
+    /// `WorkingTree::optimize_overlapped`), each round starting on a root once it and its
+    /// ancestors within the reach are done in the round before; None: the rounds one after
+    /// another. Teams do not apply.
+    pub overlap: Option<u32>,
 }
 
 impl RoundSchedule {
@@ -198,20 +240,25 @@ const TREELET_SIZES: usize = (MAX_TREELET_SIZE - MIN_TREELET_SIZE + 1) as usize;
 /// Treelet kernels compiled when first used, one per treelet size from MIN_TREELET_SIZE and DP
 /// form (`dp as usize`): the WGSL overrides `TREELET_SIZE` and `TREELET_DP_LOOP` select the
 /// generated DP (`dp_unrolled`).
-struct TreeletKernels {
+pub(crate) struct TreeletKernels {
     decl: &'static KernelDecl<RoundParams>,
     compiled: [[OnceLock<Kernel<RoundParams>>; TreeletDp::FORMS]; TREELET_SIZES],
 }
 
 impl TreeletKernels {
-    fn new(decl: &'static KernelDecl<RoundParams>) -> Self {
+    pub(crate) fn new(decl: &'static KernelDecl<RoundParams>) -> Self {
         Self {
             decl,
             compiled: Default::default(),
         }
     }
 
-    fn get(&self, ctx: &GpuContext, treelet_size: u32, dp: TreeletDp) -> &Kernel<RoundParams> {
+    pub(crate) fn get(
+        &self,
+        ctx: &GpuContext,
+        treelet_size: u32,
+        dp: TreeletDp,
+    ) -> &Kernel<RoundParams> {
         self.compiled[(treelet_size - MIN_TREELET_SIZE) as usize][dp as usize].get_or_init(|| {
             let overrides = &[
                 (TREELET_SIZE_OVERRIDE, f64::from(treelet_size)),
@@ -254,7 +301,7 @@ impl TreeletRounds {
     }
 
     /// Levels of a round of `n` leaves and smallest root `gamma` that get a dispatch each.
-    fn dispatched(&self, n: u32, gamma: u32, device: wgpu::DeviceType) -> u32 {
+    pub(crate) fn dispatched(&self, n: u32, gamma: u32, device: wgpu::DeviceType) -> u32 {
         self.schedule
             .level_dispatches
             .unwrap_or_else(|| level_dispatches(n, gamma, device))
@@ -297,56 +344,15 @@ impl TreeletRounds {
         round: &Round,
     ) {
         let ctx = rec.ctx;
-        let mut pass = rec.pass("treelets");
         let n = count.capacity();
         let dispatched = self.dispatched(n, round.gamma, ctx.info.device_type);
-        let roots = self.roots.as_ref().expect("reserve() allocates the roots");
-        // One invocation per leaf, or per internal node when only levels are computed.
-        let level = if round.levels_only {
-            &self.level
-        } else {
-            &self.climb_level
-        };
-        let grid = level.grid(ctx, n);
-        let mut params = RoundParams {
-            count: n,
-            row_pitch: grid.row_pitch,
-            gamma: round.gamma,
-            max_leaf_size: round.model.max_leaf_size,
-            ci: round.model.ci,
-            ct: round.model.ct,
-            zero: 0,
-            level_dispatches: dispatched,
-            level: 0,
-            levels_only: u32::from(round.levels_only),
-            team_below: self.schedule.team_below(),
-            next_gamma: round.next_gamma,
-            level_first: 0,
-            _pad: [0; 3],
-        };
-        let limit = count.limit(ctx);
-        pass.dispatch(
-            level,
-            grid,
-            &params,
-            &[
-                state.nodes,
-                state.parents,
-                state.prim_counts,
-                state.costs,
-                state.levels,
-                state.arrivals,
-                state.schedule,
-                limit,
-                state.prim_boxes,
-                state.order,
-                roots,
-                state.keys,
-            ],
-        );
+        let mut pass = rec.pass("treelets");
+        let mut params = self.record_levels(&mut pass, ctx, count, state, round, dispatched);
         if round.gamma == u32::MAX {
             return;
         }
+        let roots = self.roots();
+        // (the rest of the round follows record_levels below)
         let optimize = self
             .optimize
             .get(ctx, round.treelet_size, self.schedule.dp());
@@ -378,6 +384,77 @@ impl TreeletRounds {
             .get(ctx, round.treelet_size, self.schedule.climb_dp());
         rec.pass("treelets climb")
             .dispatch(climb, Grid::workgroups(1, 1), &params, &climb_buffers);
+    }
+
+    /// The roots bucketed by level (`reserve` allocates them).
+    pub(crate) fn roots(&self) -> &wgpu::Buffer {
+        self.roots.as_ref().expect("reserve() allocates the roots")
+    }
+
+    /// Records a round's `nodes_level` (its schedule: counts, costs, levels, the roots of the
+    /// first `dispatched` levels bucketed with their indirect arguments, in the first round also
+    /// the LBVH) into `pass`; returns the parameters for the round's treelet kernels.
+    pub(crate) fn record_levels(
+        &self,
+        pass: &mut Pass<'_>,
+        ctx: &GpuContext,
+        count: ItemCount<'_>,
+        state: &TreeletState<'_>,
+        round: &Round,
+        dispatched: u32,
+    ) -> RoundParams {
+        let n = count.capacity();
+        let roots = self.roots();
+        // One invocation per leaf, or per internal node when only levels are computed.
+        let level = if round.levels_only {
+            &self.level
+        } else {
+            &self.climb_level
+        };
+        let grid = level.grid(ctx, n);
+        let params = RoundParams {
+            count: n,
+            row_pitch: grid.row_pitch,
+            gamma: round.gamma,
+            max_leaf_size: round.model.max_leaf_size,
+            ci: round.model.ci,
+            ct: round.model.ct,
+            zero: 0,
+            level_dispatches: dispatched,
+            level: 0,
+            levels_only: u32::from(round.levels_only),
+            // The overlapped rounds' first wave takes the first level's arguments (no teams).
+            team_below: match self.schedule.overlap {
+                Some(_) => 0,
+                None => self.schedule.team_below(),
+            },
+            next_gamma: round.next_gamma,
+            level_first: 0,
+            rounds: 0,
+            reach: 0,
+            wave: 0,
+        };
+        let limit = count.limit(ctx);
+        pass.dispatch(
+            level,
+            grid,
+            &params,
+            &[
+                state.nodes,
+                state.parents,
+                state.prim_counts,
+                state.costs,
+                state.levels,
+                state.arrivals,
+                state.schedule,
+                limit,
+                state.prim_boxes,
+                state.order,
+                roots,
+                state.keys,
+            ],
+        );
+        params
     }
 }
 

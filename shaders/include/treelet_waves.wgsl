@@ -1,0 +1,144 @@
+// The treelet rounds overlapped in waves (Karras & Aila 2013, §4's rounds, run ahead of each
+// other; GPU twin of the CPU's `WorkingTree::optimize_overlapped`, whose rule it follows exactly).
+// In wave w, round r optimizes every root Q of at least γ_r = γ_1·2^r primitives that is not done
+// in round r, whose children of at least γ_r are done in round r and, for r > 0, which with its
+// ancestors up to `params.reach` levels up is done in round r − 1 (done: before wave w). A wave
+// has two steps: `find_candidate` (waves_find.wgsl, or the climb's first phase) sorts the wave's
+// candidates into its treelets and the ones still waiting for their ancestors (kept for the next
+// wave); `optimize_entry` (treelet_wave_optimize.wgsl, for waves_optimize.wgsl and the climb's
+// second phase) optimizes a treelet
+// and adds the candidates it may have made ready: its parent in its round, itself and the
+// internal nodes it rewrote in the next round. Every root the rule makes ready is a candidate of
+// its wave (a candidate is dropped only while a condition fails that an optimized treelet will
+// make true, which adds it again), and a wave's treelets are disjoint subtrees, so the waves
+// optimize what the CPU twin's do. Entries are `node | round << ROUND_SHIFT`.
+// The including kernel declares `params: RoundParams` (treelet_round.wgsl), `nodes`, `parents`,
+// `prim_counts`, `done: array<u32>` (the wave in which each node was done in each round, 0: not
+// yet; node-major), `candidate_waves: array<atomic<u32>>` (the last wave each node and round was
+// made a candidate of), `lists: array<u32>` (the candidates of odd and even waves, `params.rounds *
+// params.count` entries each, then the wave's treelets) and `wave_state: array<atomic<u32>>`.
+
+const ROUND_SHIFT: u32 = 28u;
+const NODE_MASK: u32 = (1u << ROUND_SHIFT) - 1u;
+
+// Words of `wave_state`: the wave's treelets, the candidates of even and odd waves, the tickets
+// of the find and optimize dispatches, and 1 once a wave found no treelet (the rounds are done:
+// the dispatches left return at once). The indirect arguments of each dispatch are in a buffer of
+// their own, which the dispatch before writes (a dispatch cannot write its own).
+const OPS_COUNT: u32 = 0u;
+const CANDIDATE_COUNT: u32 = 1u;
+const FIND_TICKET: u32 = 3u;
+const OPTIMIZE_TICKET: u32 = 4u;
+const STOPPED: u32 = 5u;
+
+// What `find_candidate` does with a candidate.
+const DROP: u32 = 0u;
+const READY: u32 = 1u;
+const WAITING: u32 = 2u;
+
+// The invocations of a wave dispatch's workgroup (each takes one entry).
+const WAVE_WORKGROUP: u32 = 32u;
+const MAX_WORKGROUPS_X: u32 = 65535u;
+
+var<workgroup> wave_stopped: u32;
+
+// Whether a wave before found no treelet (every invocation calls it).
+fn rounds_stopped(lid: u32) -> bool {
+    if lid == 0u {
+        wave_stopped = atomicLoad(&wave_state[STOPPED]);
+    }
+    return workgroupUniformLoad(&wave_stopped) != 0u;
+}
+
+fn gamma_of(round: u32) -> u32 {
+    return params.gamma << round;
+}
+
+fn candidates_base(wave: u32) -> u32 {
+    return (wave & 1u) * params.rounds * params.count;
+}
+
+fn ops_base() -> u32 {
+    return 2u * params.rounds * params.count;
+}
+
+fn done_in(node: u32, round: u32) -> u32 {
+    return done[node * params.rounds + round];
+}
+
+// Whether `node` was done in `round` before wave `wave`.
+fn done_before(node: u32, round: u32, wave: u32) -> bool {
+    let d = done_in(node, round);
+    return d != 0u && d < wave;
+}
+
+fn is_leaf(node: u32) -> bool {
+    return (nodes[node].right_or_count & LEAF_FLAG) != 0u;
+}
+
+// Makes (node, round) a candidate of wave `wave`, once.
+fn add_candidate(node: u32, round: u32, wave: u32) {
+    if atomicMax(&candidate_waves[node * params.rounds + round], wave) < wave {
+        let slot = atomicAdd(&wave_state[CANDIDATE_COUNT + (wave & 1u)], 1u);
+        lists[candidates_base(wave) + slot] = node | (round << ROUND_SHIFT);
+    }
+}
+
+// A candidate of wave `wave`: READY (optimized in this wave), WAITING (only an ancestor within
+// the reach is not done in the round before: a candidate of the next wave) or DROP.
+fn candidate_state(node: u32, round: u32, wave: u32) -> u32 {
+    let gamma = gamma_of(round);
+    if done_in(node, round) != 0u || is_leaf(node) || prim_counts[node] < gamma {
+        return DROP;
+    }
+    if round > 0u && !done_before(node, round - 1u, wave) {
+        return DROP;
+    }
+    let n = nodes[node];
+    let children = array<u32, 2>(n.left_or_first, n.right_or_count);
+    for (var k = 0u; k < 2u; k++) {
+        let c = children[k];
+        if !is_leaf(c) && prim_counts[c] >= gamma && !done_before(c, round, wave) {
+            return DROP;
+        }
+    }
+    if round == 0u {
+        return READY;
+    }
+    var x = node;
+    var up = 0u;
+    var state = READY;
+    loop {
+        if !done_before(x, round - 1u, wave) {
+            state = WAITING;
+            break;
+        }
+        if x == 0u || up >= params.reach {
+            break;
+        }
+        x = parents[x];
+        up++;
+    }
+    return state;
+}
+
+// Step 1 of wave `wave` for one candidate entry.
+fn find_candidate(entry: u32, wave: u32) {
+    let node = entry & NODE_MASK;
+    let round = entry >> ROUND_SHIFT;
+    let state = candidate_state(node, round, wave);
+    if state == READY {
+        let slot = atomicAdd(&wave_state[OPS_COUNT], 1u);
+        lists[ops_base() + slot] = entry;
+    } else if state == WAITING {
+        add_candidate(node, round, wave + 1u);
+    }
+}
+
+// The indirect arguments (x, y, z) of a dispatch over `items` entries, WAVE_WORKGROUP per
+// workgroup.
+fn wave_args(items: u32) -> vec3<u32> {
+    let groups = (items + WAVE_WORKGROUP - 1u) / WAVE_WORKGROUP;
+    let y = (groups + MAX_WORKGROUPS_X - 1u) / MAX_WORKGROUPS_X;
+    return vec3<u32>(select(0u, (groups + y - 1u) / max(y, 1u), y > 0u), y, 1u);
+}

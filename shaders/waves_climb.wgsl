@@ -1,0 +1,65 @@
+// Overlapped treelet rounds, the waves after the dispatched ones (treelet_waves.wgsl), in one
+// workgroup: the waves near the end hold few treelets, where a dispatch each would mostly cost
+// its launch. Each wave: the candidates sorted (step 1), a barrier, the treelets optimized
+// (step 2), a barrier; it ends with the first wave that has no treelet (none is left then: the
+// CPU twin ends likewise). Node data is only shared within the workgroup: storageBarriers order
+// it.
+#include "bvh_node.wgsl"
+#include "treelet_round.wgsl"
+
+const WORKGROUP: u32 = 128u;
+
+@group(0) @binding(0) var<uniform> params: RoundParams;
+@group(0) @binding(1) var<storage, read_write> nodes: array<BvhNode>;
+@group(0) @binding(2) var<storage, read_write> parents: array<u32>;
+@group(0) @binding(3) var<storage, read_write> prim_counts: array<u32>;
+@group(0) @binding(4) var<storage, read_write> costs: array<f32>;
+// Unused by the overlapped rounds (waves_optimize.wgsl).
+@group(0) @binding(5) var<storage, read_write> next_levels: array<u32>;
+@group(0) @binding(6) var<storage, read_write> done: array<u32>;
+@group(0) @binding(7) var<storage, read_write> candidate_waves: array<atomic<u32>>;
+@group(0) @binding(8) var<storage, read_write> lists: array<u32>;
+@group(0) @binding(9) var<storage, read_write> wave_state: array<atomic<u32>>;
+
+#include "treelet_dp.wgsl"
+#include "treelet_waves.wgsl"
+#include "treelet_wave_optimize.wgsl"
+
+var<workgroup> wave_items: u32;
+
+@compute @workgroup_size(WORKGROUP)
+fn main(@builtin(local_invocation_index) lid: u32) {
+    var wave = params.wave;
+    if rounds_stopped(lid) {
+        return;
+    }
+    loop {
+        // The candidates stored by the wave before (or the dispatches before) are visible.
+        storageBarrier();
+        if lid == 0u {
+            wave_items = atomicLoad(&wave_state[CANDIDATE_COUNT + (wave & 1u)]);
+        }
+        let candidates = workgroupUniformLoad(&wave_items);
+        for (var i = lid; i < candidates; i += WORKGROUP) {
+            find_candidate(lists[candidates_base(wave) + i], wave);
+        }
+        storageBarrier();
+        if lid == 0u {
+            wave_items = atomicLoad(&wave_state[OPS_COUNT]);
+        }
+        let treelets = workgroupUniformLoad(&wave_items);
+        if treelets == 0u {
+            break;
+        }
+        for (var i = lid; i < treelets; i += WORKGROUP) {
+            optimize_entry(lists[ops_base() + i], wave);
+        }
+        storageBarrier();
+        workgroupBarrier();
+        if lid == 0u {
+            atomicStore(&wave_state[CANDIDATE_COUNT + (wave & 1u)], 0u);
+            atomicStore(&wave_state[OPS_COUNT], 0u);
+        }
+        wave++;
+    }
+}

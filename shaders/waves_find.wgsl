@@ -1,0 +1,58 @@
+// Overlapped treelet rounds, step 1 of a wave (treelet_waves.wgsl): each of the wave's candidates
+// goes to the wave's treelets, to the next wave's candidates or nowhere. The workgroup that
+// finishes last writes the arguments of the wave's optimize dispatch; a wave without treelets
+// stops the rounds (no later wave could find one: nothing changes any more).
+#include "bvh_node.wgsl"
+#include "treelet_round.wgsl"
+
+@group(0) @binding(0) var<uniform> params: RoundParams;
+@group(0) @binding(1) var<storage, read> nodes: array<BvhNode>;
+@group(0) @binding(2) var<storage, read> parents: array<u32>;
+@group(0) @binding(3) var<storage, read> prim_counts: array<u32>;
+@group(0) @binding(4) var<storage, read> done: array<u32>;
+@group(0) @binding(5) var<storage, read_write> candidate_waves: array<atomic<u32>>;
+@group(0) @binding(6) var<storage, read_write> lists: array<u32>;
+@group(0) @binding(7) var<storage, read_write> wave_state: array<atomic<u32>>;
+// The wave's optimize dispatch's indirect arguments.
+@group(0) @binding(8) var<storage, read_write> optimize_args: array<u32>;
+
+#include "treelet_waves.wgsl"
+
+var<workgroup> is_last: u32;
+
+@compute @workgroup_size(WAVE_WORKGROUP)
+fn main(
+    @builtin(local_invocation_index) lid: u32,
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+) {
+    let wave = params.wave;
+    if rounds_stopped(lid) {
+        return;
+    }
+    let i = (wid.x + wid.y * nwg.x) * WAVE_WORKGROUP + lid;
+    if i < atomicLoad(&wave_state[CANDIDATE_COUNT + (wave & 1u)]) {
+        find_candidate(lists[candidates_base(wave) + i], wave);
+    }
+    // Release: the workgroup's entries are stored before its ticket is taken.
+    storageBarrier();
+    if lid == 0u {
+        is_last = u32(atomicAdd(&wave_state[FIND_TICKET], 1u) + 1u == nwg.x * nwg.y);
+    }
+    if workgroupUniformLoad(&is_last) == 0u {
+        return;
+    }
+    // Acquire: every workgroup's entries are counted.
+    storageBarrier();
+    if lid == 0u {
+        let treelets = atomicLoad(&wave_state[OPS_COUNT]);
+        let args = wave_args(treelets);
+        optimize_args[0] = args.x;
+        optimize_args[1] = args.y;
+        optimize_args[2] = args.z;
+        if treelets == 0u {
+            atomicStore(&wave_state[STOPPED], 1u);
+        }
+        atomicStore(&wave_state[FIND_TICKET], 0u);
+    }
+}

@@ -1,0 +1,190 @@
+//! The treelet rounds overlapped in waves on the GPU (Karras & Aila 2013, §4: the rounds of
+//! bottom-up restructuring, each run ahead of the one before where its treelets cannot meet a
+//! treelet still to come of it): kernels `waves_find` and `waves_optimize` (a dispatch each per
+//! wave, for the waves of many treelets) and `waves_climb` (one workgroup, the waves after them),
+//! sharing `treelet_waves.wgsl`. The first round's schedule (`nodes_level`, which also builds the
+//! LBVH) gives the first wave's candidates: the roots of treelet level 1. GPU twin of the CPU's
+//! `WorkingTree::optimize_overlapped`, which tests compare it against exactly; selected by
+//! `RoundSchedule::overlap`.
+
+use super::dp::CostModel;
+use super::dp_unrolled::TreeletDp;
+use super::rounds::{level_start, RoundParams, TreeletKernels, TreeletState, SCHEDULE_ARGS};
+use crate::gpu::{
+    indirect_buffer_zeroed, kernel, storage_buffer_zeroed, GpuContext, Grid, Kernel, Recorder,
+};
+use crate::Result;
+
+kernel!(pub WAVES_FIND: RoundParams = "waves_find"::"main", [32, 1, 1],
+    [Read, Read, Read, Read, ReadWrite, ReadWrite, ReadWrite, ReadWrite]);
+kernel!(pub WAVES_OPTIMIZE: RoundParams = "waves_optimize"::"main", [32, 1, 1],
+    [ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite,
+     ReadWrite]);
+kernel!(pub WAVES_CLIMB: RoundParams = "waves_climb"::"main", [128, 1, 1],
+    [ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite]);
+
+/// Words of the wave state (`treelet_waves.wgsl`): counts, tickets, the stop flag.
+const WAVE_STATE_WORDS: u64 = 6;
+/// Where the wave state holds the count of odd waves' candidates (`CANDIDATE_COUNT + 1` in
+/// `treelet_waves.wgsl`).
+const ODD_CANDIDATES_WORD: u64 = 2;
+/// The entries' node field (`ROUND_SHIFT` in `treelet_waves.wgsl`).
+const MAX_NODES: u32 = 1 << 28;
+
+struct WaveBuffers {
+    /// Leaves and rounds the buffers have room for.
+    capacity: u32,
+    rounds: u32,
+    done: wgpu::Buffer,
+    candidate_waves: wgpu::Buffer,
+    lists: wgpu::Buffer,
+    state: wgpu::Buffer,
+    /// The indirect arguments of the find and the optimize dispatches (each written by the
+    /// other).
+    find_args: wgpu::Buffer,
+    optimize_args: wgpu::Buffer,
+}
+
+/// The overlapped rounds' kernels and scratch, reused per build.
+pub(crate) struct OverlappedRounds {
+    find: Kernel<RoundParams>,
+    optimize: TreeletKernels,
+    climb: TreeletKernels,
+    buffers: Option<WaveBuffers>,
+}
+
+/// What one overlapped build of the rounds does.
+pub(crate) struct Overlap {
+    pub model: CostModel,
+    pub treelet_size: u32,
+    pub rounds: u32,
+    pub reach: u32,
+    /// Waves given a find and an optimize dispatch each; the climb takes the rest.
+    pub dispatched: u32,
+    pub dp: TreeletDp,
+    pub climb_dp: TreeletDp,
+}
+
+impl OverlappedRounds {
+    pub fn new(ctx: &GpuContext) -> Self {
+        Self {
+            find: Kernel::new(ctx, &WAVES_FIND),
+            optimize: TreeletKernels::new(&WAVES_OPTIMIZE),
+            climb: TreeletKernels::new(&WAVES_CLIMB),
+            buffers: None,
+        }
+    }
+
+    /// Grows the scratch for trees of up to `n` leaves and `rounds` rounds.
+    pub fn reserve(&mut self, ctx: &GpuContext, n: u32, rounds: u32) -> Result<()> {
+        if n >= MAX_NODES {
+            return Err(crate::Error::InvalidArgument(format!(
+                "overlapped treelet rounds take fewer than {MAX_NODES} leaves, got {n}"
+            )));
+        }
+        if self
+            .buffers
+            .as_ref()
+            .is_some_and(|b| b.capacity >= n && b.rounds >= rounds)
+        {
+            return Ok(());
+        }
+        self.buffers = None;
+        let per_round = u64::from(n) * u64::from(rounds) * 4;
+        self.buffers = Some(WaveBuffers {
+            capacity: n,
+            rounds,
+            done: storage_buffer_zeroed(ctx, "treelet waves done", per_round)?,
+            candidate_waves: storage_buffer_zeroed(ctx, "treelet waves candidates", per_round)?,
+            lists: storage_buffer_zeroed(
+                ctx,
+                "treelet waves lists",
+                2 * per_round + u64::from(n) * 4,
+            )?,
+            state: storage_buffer_zeroed(ctx, "treelet waves state", WAVE_STATE_WORDS * 4)?,
+            find_args: indirect_buffer_zeroed(ctx, "treelet waves find arguments", 12)?,
+            optimize_args: indirect_buffer_zeroed(ctx, "treelet waves optimize arguments", 12)?,
+        });
+        Ok(())
+    }
+
+    /// Records the rounds over a working tree of `n` leaves (capacity) whose first schedule
+    /// (`TreeletRounds::record_levels` of the first round, with its roots in `roots`) was
+    /// recorded before. Call `reserve` first.
+    pub fn record(
+        &self,
+        rec: &mut Recorder<'_>,
+        n: u32,
+        state: &TreeletState<'_>,
+        roots: &wgpu::Buffer,
+        overlap: &Overlap,
+    ) {
+        let ctx = rec.ctx;
+        let b = self
+            .buffers
+            .as_ref()
+            .expect("reserve() allocates the wave buffers");
+        // Lists sized for the rounds this build has (params.rounds · n per wave parity).
+        let rounds = overlap.rounds;
+        let encoder = rec.encoder();
+        encoder.clear_buffer(&b.done, 0, None);
+        encoder.clear_buffer(&b.candidate_waves, 0, None);
+        encoder.clear_buffer(&b.state, 0, None);
+        // Wave 1 (odd): the first round's roots of level 1, their count and arguments.
+        let level_one = level_start(n, overlap.treelet_size, 2) * 4;
+        if level_one > 0 {
+            let odd = u64::from(rounds) * u64::from(n) * 4;
+            encoder.copy_buffer_to_buffer(roots, 0, &b.lists, odd, level_one);
+        }
+        encoder.copy_buffer_to_buffer(state.schedule, 0, &b.state, ODD_CANDIDATES_WORD * 4, 4);
+        encoder.copy_buffer_to_buffer(state.schedule, SCHEDULE_ARGS * 4, &b.find_args, 0, 12);
+        let params = |wave| {
+            RoundParams::waves(
+                n,
+                overlap.treelet_size,
+                &overlap.model,
+                rounds,
+                overlap.reach,
+                wave,
+            )
+        };
+        let find_buffers = [
+            state.nodes,
+            state.parents,
+            state.prim_counts,
+            &b.done,
+            &b.candidate_waves,
+            &b.lists,
+            &b.state,
+            &b.optimize_args,
+        ];
+        let climb_buffers = [
+            state.nodes,
+            state.parents,
+            state.prim_counts,
+            state.costs,
+            state.next_levels,
+            &b.done,
+            &b.candidate_waves,
+            &b.lists,
+            &b.state,
+        ];
+        let mut optimize_buffers = climb_buffers.to_vec();
+        optimize_buffers.push(&b.find_args);
+        let optimize = self.optimize.get(ctx, overlap.treelet_size, overlap.dp);
+        let mut pass = rec.pass("treelets");
+        for wave in 1..=overlap.dispatched {
+            let params = params(wave);
+            pass.dispatch_indirect(&self.find, &b.find_args, 0, &params, &find_buffers);
+            pass.dispatch_indirect(optimize, &b.optimize_args, 0, &params, &optimize_buffers);
+        }
+        drop(pass);
+        let climb = self.climb.get(ctx, overlap.treelet_size, overlap.climb_dp);
+        rec.pass("treelets climb").dispatch(
+            climb,
+            Grid::workgroups(1, 1),
+            &params(overlap.dispatched + 1),
+            &climb_buffers,
+        );
+    }
+}
