@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The treelet rounds' schedule on a lent GPU, in one `device` call, per scene, trbvh (7,3): the
-# default, each pair of --treelet-dp and --climb-dp, teams (--team-below), and with LEVELS set
+# default, each pair of --treelet-dp and --climb-dp, teams (--team-below), the rounds overlapped
+# (--round-overlap at each of OVERLAPS, also with the loop DP), and with LEVELS set
 # every combination of those --level-dispatches and --team-below (the defaults came from such a
 # sweep in the first H200 session; the same tree each time, tested); then lbvh and trbvh at each
 # --climb-width.
@@ -8,7 +9,7 @@
 # Then `run` with carry [".gpu", ".gl"] and the command:   bash scripts/gpu-schedules.sh
 # JSON lines go to $OUT/schedules.jsonl and $OUT/climbs.jsonl; a table of the climb widths, then
 # one of build ms and the two treelet stages, fastest first per scene, are printed last. SCENES,
-# LEVELS, TEAMS, DPS, CLIMBS and REPEATS override the sweep; with TREELET
+# LEVELS, TEAMS, DPS, OVERLAPS, CLIMBS and REPEATS override the sweep; with TREELET
 # set to a treelet binary it runs that one here instead (a dry run on lavapipe:
 # TREELET=target/release/treelet SCENES=field:100 LEVELS=0,4 TEAMS=0,64 REPEATS=1 bash scripts/gpu-schedules.sh).
 set -u
@@ -21,7 +22,8 @@ for s in ${SCENES:-conference sibenik field:707}; do
     sweep="--level-dispatches $LEVELS --team-below ${TEAMS:-0,64,512}"
   fi
   for opts in "" "--treelet-dp ${DPS:-unrolled,loop} --climb-dp ${DPS:-unrolled,loop}" \
-      "--team-below ${TEAMS:-64,512}" ${sweep:+"$sweep"}; do
+      "--team-below ${TEAMS:-64,512}" "--round-overlap ${OVERLAPS:-6,4}" \
+      "--round-overlap ${OVERLAPS:-6,4} --treelet-dp loop" ${sweep:+"$sweep"}; do
     # shellcheck disable=SC2086
     timeout 200 "$bin" bench --scene "$s" --builder trbvh $opts --width 64 --height 64 --spp 1 \
       --repeats "${REPEATS:-11}" >> "$out/schedules.jsonl" 2>> "$out/schedules.log" \
@@ -50,13 +52,15 @@ PY
 python3 - "$out/schedules.jsonl" <<'PY'
 import json, sys
 rows = [json.loads(l) for l in open(sys.argv[1]) if l.startswith("{")]
-print("scene            levels  team_below  dp        climb dp  build ms  treelets ms  climb ms  dispatches  sah")
+print("scene            levels  team_below  dp        climb dp  overlap  build ms  treelets ms  climb ms  dispatches  sah")
 for scene in dict.fromkeys(r["scene"] for r in rows):
     runs = sorted((r for r in rows if r["scene"] == scene), key=lambda r: r["build_ms"])
     for r in runs:
         st = r["stages_ms"]
         levels = "auto" if r["level_dispatches"] is None else r["level_dispatches"]
+        overlap = "none" if r.get("round_overlap") is None else r["round_overlap"]
         print(f"{scene[-16:]:16} {levels:>6} {r['team_below']:>11} {r['treelet_dp']:9} {r['climb_dp']:9}"
+              f" {overlap:>7}"
               f" {r['build_ms']:9.3f}"
               f" {st.get('treelets') or 0:12.3f} {st.get('treelets climb') or 0:9.3f}"
               f" {r['dispatches']:11} {r['sah']:.4f}")

@@ -248,6 +248,24 @@ fn bench_compares_dp_forms_on_the_same_tree() {
     }
 }
 
+/// `bench --round-overlap none,6,4` measures trbvh with the rounds one after another and
+/// overlapped at each reach, reports the reach (null for none), and builds the same tree at
+/// reach 6 (the scene's overlapped rounds give the sequential tree).
+#[test]
+fn bench_round_overlap_reports_each_reach() {
+    let records = quick_bench("trbvh", &["--round-overlap", "none,6,4"]);
+    let reaches: Vec<_> = records
+        .iter()
+        .map(|r| r["round_overlap"].as_u64())
+        .collect();
+    assert_eq!(reaches, [None, Some(6), Some(4)]);
+    for record in &records {
+        assert_eq!(record["valid"], true);
+    }
+    assert_eq!(records[1]["sah"], records[0]["sah"]);
+    assert_eq!(records[1]["nodes"], records[0]["nodes"]);
+}
+
 /// `bench --wide-level-dispatches` converts the same tree with every split of the wide levels
 /// between indirect dispatches and the one-workgroup finish (the root's dispatch and the finish
 /// always run), reports the count asked for, and is refused without the wide layout.
@@ -519,7 +537,7 @@ fn overflowing_triangles_are_reported_as_such() {
 
 #[test]
 fn options_of_other_builders_are_refused() {
-    let cases: [(&[&str], &str); 8] = [
+    let cases: [(&[&str], &str); 10] = [
         (
             &["render", "--builder", "sweep", "--treelet-size", "99"],
             "--treelet-size does not apply to builder sweep",
@@ -547,6 +565,14 @@ fn options_of_other_builders_are_refused() {
         (
             &["bench", "--builder", "sweep", "--climb-dp", "loop"],
             "--climb-dp does not apply to builder sweep",
+        ),
+        (
+            &["bench", "--builder", "lbvh", "--round-overlap", "6"],
+            "--round-overlap does not apply to builder lbvh",
+        ),
+        (
+            &["bench", "--builder", "trbvh", "--round-overlap", "far"],
+            "'far' is neither a number of levels nor none",
         ),
         (
             &["bench", "--builder", "trbvh", "--split-budget", "0.3"],

@@ -20,7 +20,8 @@
 //! tie-breaking). The treelet size is a pipeline constant: the treelet kernels are compiled per
 //! size when first used, the lone DP written out for it (`dp_unrolled`), or as loops on request
 //! (`RoundSchedule::dp` for the dispatched levels, `RoundSchedule::climb_dp` for the climb, for
-//! GPUs to compare; the same tree).
+//! GPUs to compare; the same tree). On request the rounds run overlapped in waves instead
+//! (`RoundSchedule::overlap`, module `waves`), after the first round's schedule here.
 
 use std::sync::OnceLock;
 
@@ -205,7 +206,8 @@ pub struct RoundSchedule {
     /// The rounds overlapped in waves with this reach (`waves`, the GPU twin of
     /// `WorkingTree::optimize_overlapped`), each round starting on a root once it and its
     /// ancestors within the reach are done in the round before; None: the rounds one after
-    /// another. Teams do not apply.
+    /// another. The level dispatches (above) times the rounds are the waves dispatched, the
+    /// climb takes the rest; teams do not apply.
     pub overlap: Option<u32>,
 }
 
