@@ -2,8 +2,8 @@
 # Everything a lent GPU is asked to measure, in one `device` call that fits a short lease, step by
 # step in this order (the trace's correctness and the A/Bs first): the test binaries ("tests"), the
 # binary-vs-wide table ("layouts"), the round schedules (the DP's forms in the dispatched levels
-# and the climb, the team threshold TEAMS, and levels dispatched where LEVELS is set:
-# "schedules"), the changes of scripts/variants/ beside this commit ("variants", when
+# and the climb, the overlapped rounds, the team threshold TEAMS, and levels dispatched where
+# LEVELS is set: "schedules"), the changes of scripts/variants/ beside this commit ("variants", when
 # `bash scripts/gpu-variants.sh build` packed them), build scaling
 # ("scaling"), the wide conversion's level dispatches ("widelevels"), where a treelet level's
 # time goes ("probe", when `bash scripts/gpu-probe.sh build`
@@ -102,11 +102,11 @@ step tests 150 bash -c tests
 # The trace first: both layouts on every scene (their ray counts must agree), then the variants.
 step layouts 80 env SCENES="conference crytek_sponza sibenik lost_empire armadillo" OPTIMAL_SCENES="conference lost_empire" \
   REPEATS=11 bash scripts/gpu-layouts.sh
-# The DP's forms (dispatched levels and climb) and teams on real builds, before the variants: the
-# question the last GPU left open (README, "On an NVIDIA H200, second session"). LEVELS adds the
-# sweep of levels dispatched.
-step schedules 150 env SCENES="${SCHEDULE_SCENES:-conference crytek_sponza sibenik field:707 field:2000}" \
-  LEVELS="${LEVELS:-}" TEAMS="${TEAMS:-4,8,16,32,256}" CLIMBS=" " REPEATS=11 bash scripts/gpu-schedules.sh
+# The DP's forms (dispatched levels and climb), the overlapped rounds and teams on real builds,
+# before the variants: the questions the last GPUs left open (README, "On an NVIDIA H200, second
+# session", and "Rounds can overlap"). LEVELS adds the sweep of levels dispatched.
+step schedules 170 env SCENES="${SCHEDULE_SCENES:-conference crytek_sponza sibenik field:707 field:2000}" \
+  LEVELS="${LEVELS:-}" TEAMS="${TEAMS:-4,16,256}" CLIMBS=" " REPEATS=11 bash scripts/gpu-schedules.sh
 if ls .gpu/variant-*.xz > /dev/null 2>&1; then
   step variants 150 env TREELET=$TREELET bash scripts/gpu-variants.sh run
 fi

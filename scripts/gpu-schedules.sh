@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The treelet rounds' schedule on a lent GPU, in one `device` call, per scene, trbvh (7,3): the
-# default, each pair of --treelet-dp and --climb-dp, teams (--team-below), the rounds overlapped
-# (--round-overlap at each of OVERLAPS, also with the loop DP), and with LEVELS set
+# default, each pair of --treelet-dp and --climb-dp, the rounds overlapped (--round-overlap at
+# each of OVERLAPS, also with the loop DP), teams (--team-below), and with LEVELS set
 # every combination of those --level-dispatches and --team-below (the defaults came from such a
 # sweep in the first H200 session; the same tree each time, tested); then lbvh and trbvh at each
 # --climb-width.
@@ -16,14 +16,15 @@ set -u
 . scripts/gpu-env.sh
 : > "$out/schedules.jsonl"
 for s in ${SCENES:-conference sibenik field:707}; do
-  # The default schedule first (no options), then the DP's forms, then teams, then the sweep.
+  # The default schedule first (no options), then the DP's forms, the overlapped rounds, teams,
+  # then the sweep.
   sweep=""
   if [ -n "${LEVELS:-}" ]; then
     sweep="--level-dispatches $LEVELS --team-below ${TEAMS:-0,64,512}"
   fi
   for opts in "" "--treelet-dp ${DPS:-unrolled,loop} --climb-dp ${DPS:-unrolled,loop}" \
-      "--team-below ${TEAMS:-64,512}" "--round-overlap ${OVERLAPS:-6,4}" \
-      "--round-overlap ${OVERLAPS:-6,4} --treelet-dp loop" ${sweep:+"$sweep"}; do
+      "--round-overlap ${OVERLAPS:-6,4}" "--round-overlap ${OVERLAPS:-6,4} --treelet-dp loop" \
+      "--team-below ${TEAMS:-64,512}" ${sweep:+"$sweep"}; do
     # shellcheck disable=SC2086
     timeout 200 "$bin" bench --scene "$s" --builder trbvh $opts --width 64 --height 64 --spp 1 \
       --repeats "${REPEATS:-11}" >> "$out/schedules.jsonl" 2>> "$out/schedules.log" \
