@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The treelet rounds' schedule on a lent GPU, in one `device` call, per scene, trbvh (7,3): the
 # default, each pair of --treelet-dp and --climb-dp, the rounds overlapped (--round-overlap at
-# each of OVERLAPS, also with the loop DP), teams (--team-below), and with LEVELS set
+# each of OVERLAPS, default 6: fewer waves dispatched (OVERLAP_LEVELS per round, the rest climbed),
+# and the loop DP at the default count), teams (--team-below), and with LEVELS set
 # every combination of those --level-dispatches and --team-below (the defaults came from such a
 # sweep in the first H200 session; the same tree each time, tested); then lbvh and trbvh at each
 # --climb-width.
@@ -9,7 +10,7 @@
 # Then `run` with carry [".gpu", ".gl"] and the command:   bash scripts/gpu-schedules.sh
 # JSON lines go to $OUT/schedules.jsonl and $OUT/climbs.jsonl; a table of the climb widths, then
 # one of build ms and the two treelet stages, fastest first per scene, are printed last. SCENES,
-# LEVELS, TEAMS, DPS, OVERLAPS, CLIMBS and REPEATS override the sweep; with TREELET
+# LEVELS, TEAMS, DPS, OVERLAPS, OVERLAP_LEVELS, CLIMBS and REPEATS override the sweep; with TREELET
 # set to a treelet binary it runs that one here instead (a dry run on lavapipe:
 # TREELET=target/release/treelet SCENES=field:100 LEVELS=0,4 TEAMS=0,64 REPEATS=1 bash scripts/gpu-schedules.sh).
 set -u
@@ -23,7 +24,8 @@ for s in ${SCENES:-conference sibenik field:707}; do
     sweep="--level-dispatches $LEVELS --team-below ${TEAMS:-0,64,512}"
   fi
   for opts in "" "--treelet-dp ${DPS:-unrolled,loop} --climb-dp ${DPS:-unrolled,loop}" \
-      "--round-overlap ${OVERLAPS:-6,4}" "--round-overlap ${OVERLAPS:-6,4} --treelet-dp loop" \
+      "--round-overlap ${OVERLAPS:-6} --level-dispatches ${OVERLAP_LEVELS:-8,11}" \
+      "--round-overlap ${OVERLAPS:-6} --treelet-dp loop" \
       "--team-below ${TEAMS:-64,512}" ${sweep:+"$sweep"}; do
     # shellcheck disable=SC2086
     timeout 200 "$bin" bench --scene "$s" --builder trbvh $opts --width 64 --height 64 --spp 1 \
