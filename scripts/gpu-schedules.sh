@@ -24,6 +24,7 @@ for s in ${SCENES:-conference sibenik field:707}; do
     sweep="--level-dispatches $LEVELS --team-below ${TEAMS:-0,64,512}"
   fi
   for opts in "" "--treelet-dp ${DPS:-unrolled,loop} --climb-dp ${DPS:-unrolled,loop}" \
+      "--round-overlap ${OVERLAPS:-6}" \
       "--round-overlap ${OVERLAPS:-6} --level-dispatches ${OVERLAP_LEVELS:-8,11}" \
       "--round-overlap ${OVERLAPS:-6} --treelet-dp loop" \
       "--team-below ${TEAMS:-64,512}" ${sweep:+"$sweep"}; do
