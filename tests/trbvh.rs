@@ -15,7 +15,7 @@ use treelet::bvh::treelet::{
     RoundSchedule, TrbvhBuilder, TreeletDp, TreeletLeaf, TreeletSettings, WorkingTree,
     MAX_LEVEL_DISPATCHES,
 };
-use treelet::bvh::{sah_cost, validate, Bvh, SahParams};
+use treelet::bvh::{sah_cost, validate, validate_with_references, Bvh, SahParams};
 use treelet::device::{Geometry, Tree};
 use treelet::gpu::GpuContext;
 use treelet::scene::{load_scene, Triangle};
@@ -573,7 +573,8 @@ fn overlapped_rounds_keep_the_sequential_trees() {
 /// twin's do (`WorkingTree::optimize_overlapped` from the GPU's own LBVH), with every wave
 /// dispatched up to the default count, with none (all in the climb's workgroup) and with one;
 /// on these inputs that is the sequential rounds' tree exactly (as the twin's test observes).
-/// Small and degenerate inputs too, and the high preset (four rounds of 8 leaves).
+/// Small and degenerate inputs too, the high preset (four rounds of 8 leaves) and pre-split
+/// references (a leaf count on the GPU).
 #[test]
 fn overlapped_rounds_on_the_gpu_equal_the_cpu_twin() {
     let builder =
@@ -589,6 +590,13 @@ fn overlapped_rounds_on_the_gpu_equal_the_cpu_twin() {
         (
             load_scene("field-10k").unwrap().triangles,
             TreeletSettings::HIGH_QUALITY,
+        ),
+        (
+            load_scene("field-10k").unwrap().triangles,
+            TreeletSettings {
+                split_percent: 30,
+                ..TreeletSettings::BALANCED
+            },
         ),
         (random_soup(1, 1), TreeletSettings::BALANCED),
         (random_soup(9, 9), TreeletSettings::BALANCED),
@@ -619,7 +627,12 @@ fn overlapped_rounds_on_the_gpu_equal_the_cpu_twin() {
                 "{what}: not the sequential rounds' tree"
             );
             assert_eq!(stages.bvh, sequential.bvh, "{what}: collapsed tree");
-            validate(&stages.bvh, &scene.triangles).expect("valid TRBVH");
+            if settings.split_percent > 0 {
+                validate_with_references(&stages.bvh, &scene.triangles)
+            } else {
+                validate(&stages.bvh, &scene.triangles)
+            }
+            .expect("valid TRBVH");
         }
     }
     builder.set_schedule(RoundSchedule::default());
