@@ -18,8 +18,6 @@
 
 #include "treelet_waves.wgsl"
 
-var<workgroup> is_last: u32;
-
 @compute @workgroup_size(WAVE_WORKGROUP)
 fn main(
     @builtin(local_invocation_index) lid: u32,
@@ -34,17 +32,7 @@ fn main(
     if i < atomicLoad(&wave_state[CANDIDATE_COUNT + (wave & 1u)]) {
         find_candidate(lists[candidates_base(wave) + i], wave);
     }
-    // Release: the workgroup's entries are stored before its ticket is taken.
-    storageBarrier();
-    if lid == 0u {
-        is_last = u32(atomicAdd(&wave_state[FIND_TICKET], 1u) + 1u == nwg.x * nwg.y);
-    }
-    if workgroupUniformLoad(&is_last) == 0u {
-        return;
-    }
-    // Acquire: every workgroup's entries are counted.
-    storageBarrier();
-    if lid == 0u {
+    if last_workgroup(lid, nwg.x * nwg.y, FIND_TICKET) && lid == 0u {
         let treelets = atomicLoad(&wave_state[OPS_COUNT]);
         let args = wave_args(treelets);
         optimize_args[0] = args.x;
@@ -53,6 +41,5 @@ fn main(
         if treelets == 0u {
             atomicStore(&wave_state[STOPPED], 1u);
         }
-        atomicStore(&wave_state[FIND_TICKET], 0u);
     }
 }

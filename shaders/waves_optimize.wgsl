@@ -24,8 +24,6 @@
 #include "treelet_waves.wgsl"
 #include "treelet_wave_optimize.wgsl"
 
-var<workgroup> is_last: u32;
-
 @compute @workgroup_size(WAVE_WORKGROUP)
 fn main(
     @builtin(local_invocation_index) lid: u32,
@@ -40,23 +38,12 @@ fn main(
     if i < atomicLoad(&wave_state[OPS_COUNT]) {
         optimize_entry(lists[ops_base() + i], wave);
     }
-    // Release: the workgroup's candidates are stored before its ticket is taken.
-    storageBarrier();
-    if lid == 0u {
-        is_last = u32(atomicAdd(&wave_state[OPTIMIZE_TICKET], 1u) + 1u == nwg.x * nwg.y);
-    }
-    if workgroupUniformLoad(&is_last) == 0u {
-        return;
-    }
-    // Acquire: every workgroup's candidates are counted.
-    storageBarrier();
-    if lid == 0u {
+    if last_workgroup(lid, nwg.x * nwg.y, OPTIMIZE_TICKET) && lid == 0u {
         let args = wave_args(atomicLoad(&wave_state[CANDIDATE_COUNT + ((wave + 1u) & 1u)]));
         find_args[0] = args.x;
         find_args[1] = args.y;
         find_args[2] = args.z;
         atomicStore(&wave_state[CANDIDATE_COUNT + (wave & 1u)], 0u);
         atomicStore(&wave_state[OPS_COUNT], 0u);
-        atomicStore(&wave_state[OPTIMIZE_TICKET], 0u);
     }
 }

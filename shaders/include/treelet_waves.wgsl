@@ -50,6 +50,27 @@ fn rounds_stopped(lid: u32) -> bool {
     return workgroupUniformLoad(&wave_stopped) != 0u;
 }
 
+var<workgroup> is_last: u32;
+
+// Whether this workgroup is the last of its dispatch of `groups` to finish, by the ticket at word
+// `ticket` of the wave state (which the last one resets). Every invocation calls it after its
+// stores: the barriers release them before the ticket is taken and, in the last workgroup,
+// acquire every other workgroup's.
+fn last_workgroup(lid: u32, groups: u32, ticket: u32) -> bool {
+    storageBarrier();
+    if lid == 0u {
+        is_last = u32(atomicAdd(&wave_state[ticket], 1u) + 1u == groups);
+    }
+    if workgroupUniformLoad(&is_last) == 0u {
+        return false;
+    }
+    storageBarrier();
+    if lid == 0u {
+        atomicStore(&wave_state[ticket], 0u);
+    }
+    return true;
+}
+
 fn gamma_of(round: u32) -> u32 {
     return params.gamma << round;
 }
