@@ -573,8 +573,8 @@ fn overlapped_rounds_keep_the_sequential_trees() {
 /// twin's do (`WorkingTree::optimize_overlapped` from the GPU's own LBVH), with every wave
 /// dispatched up to the default count, with none (all in the climb's workgroup) and with one;
 /// on these inputs that is the sequential rounds' tree exactly (as the twin's test observes).
-/// Small and degenerate inputs too, the high preset (four rounds of 8 leaves) and pre-split
-/// references (a leaf count on the GPU).
+/// Small and degenerate inputs too, the high and fast presets (four rounds of 8 leaves, one of
+/// 5) and pre-split references (a leaf count on the GPU).
 #[test]
 fn overlapped_rounds_on_the_gpu_equal_the_cpu_twin() {
     let builder =
@@ -598,6 +598,7 @@ fn overlapped_rounds_on_the_gpu_equal_the_cpu_twin() {
                 ..TreeletSettings::BALANCED
             },
         ),
+        (random_soup(2000, 50), TreeletSettings::FAST),
         (random_soup(1, 1), TreeletSettings::BALANCED),
         (random_soup(9, 9), TreeletSettings::BALANCED),
         (vec![t; 500], TreeletSettings::BALANCED),
