@@ -1,14 +1,14 @@
 // The treelet rounds overlapped in waves (Karras & Aila 2013, §4's rounds, run ahead of each
 // other; GPU twin of the CPU's `WorkingTree::optimize_overlapped`, whose rule it follows exactly).
-// In wave w, round r optimizes every root Q of at least γ_r = γ_1·2^r primitives that is not done
-// in round r, whose children of at least γ_r are done in round r and, for r > 0, which with its
-// ancestors up to `params.reach` levels up is done in round r − 1 (done: before wave w). A wave
-// has two steps: `find_candidate` (waves_find.wgsl, or the climb's first phase) sorts the wave's
-// candidates into its treelets and the ones still waiting for their ancestors (kept for the next
-// wave); `optimize_entry` (treelet_wave_optimize.wgsl, for waves_optimize.wgsl and the climb's
-// second phase) optimizes a treelet
-// and adds the candidates it may have made ready: its parent in its round, itself and the
-// internal nodes it rewrote in the next round. Every root the rule makes ready is a candidate of
+// In wave w, round r (from 0) optimizes every root Q of at least γ_r = treelet size · 2^r
+// primitives that is not done in round r, whose children of at least γ_r are done in round r and,
+// for r > 0, which with its ancestors up to `params.reach` levels up is done in round r − 1 (done:
+// before wave w). A wave has two steps: `find_candidate` (waves_find.wgsl, or the climb's first
+// phase) sorts the wave's candidates into its treelets and the ones still waiting for their
+// ancestors (kept for the next wave); `optimize_entry` (treelet_wave_optimize.wgsl, for
+// waves_optimize.wgsl and the climb's second phase) optimizes a treelet and adds the candidates
+// it may have made ready: its parent in its round, itself and the internal nodes it rewrote in
+// the next round. Every root the rule makes ready is a candidate of
 // its wave (a candidate is dropped only while a condition fails that an optimized treelet will
 // make true, which adds it again), and a wave's treelets are disjoint subtrees, so the waves
 // optimize what the CPU twin's do. Entries are `node | round << ROUND_SHIFT`.
