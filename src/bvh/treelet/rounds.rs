@@ -317,10 +317,12 @@ impl TreeletRounds {
             .iter()
             .filter(|&&gamma| gamma != u32::MAX)
             .map(|&gamma| {
+                // At least one level dispatched: the overlapped rounds take the first level's
+                // roots and arguments from the first schedule.
                 level_start(
                     n,
                     gamma,
-                    self.dispatched(n, gamma, ctx.info.device_type) + 2,
+                    self.dispatched(n, gamma, ctx.info.device_type).max(1) + 2,
                 )
             })
             .max()
