@@ -2,8 +2,8 @@
 //! primitive counts and SAH costs), one restructuring round (Karras & Aila 2013, §3-4) processed in
 //! post-order exactly as the GPU's bottom-up climb processes it, and the leaf collapse with
 //! compaction. Same float operations in the same order as the kernels. Also the rounds overlapped
-//! in waves (`optimize_overlapped`), a schedule the GPU does not run yet: how far a round can run
-//! ahead of the one before without changing the trees.
+//! in waves (`optimize_overlapped`, the twin of the GPU's `RoundSchedule::overlap`): how far a
+//! round can run ahead of the one before without changing the trees.
 
 use glam::Vec3;
 
@@ -93,12 +93,13 @@ impl WorkingTree {
         );
     }
 
-    /// The rounds of `gammas` overlapped in waves (a study of the schedule; the GPU runs the
-    /// rounds one after another). In each wave, round r optimizes every root Q of at least γ_r
-    /// primitives whose children of at least γ_r are done in round r (so round 1 its roots of
-    /// treelet level w in wave w) and, for r > 1, which with its ancestors up to `reach` levels
-    /// up is done in round r − 1 (`None`: all of them, so each round waits for the whole round before: the
-    /// sequential rounds, one wave per treelet level). A wave's treelets are disjoint (a treelet
+    /// The rounds of `gammas` overlapped in waves (the GPU's `RoundSchedule::overlap`, module
+    /// `waves`, follows the same rule). In each wave, round r optimizes every root Q of at least
+    /// γ_r primitives whose children of at least γ_r are done in round r (so round 1 its roots
+    /// of treelet level w in wave w) and, for r > 1, which with its ancestors up to `reach`
+    /// levels up is done in round r − 1 (`None`: all of them, so each round waits for the whole
+    /// round before: the sequential rounds, one wave per treelet level). A wave's treelets are
+    /// disjoint (a treelet
     /// spans six levels at most), so their order does not matter. Internal nodes a treelet
     /// rewrites count as done in its round and the ones before (their sequential visit came
     /// first). Returns the treelets optimized in each wave: as many waves as a GPU schedule would
