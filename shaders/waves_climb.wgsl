@@ -25,8 +25,6 @@ const WORKGROUP: u32 = 128u;
 #include "treelet_waves.wgsl"
 #include "treelet_wave_optimize.wgsl"
 
-var<workgroup> wave_items: u32;
-
 @compute @workgroup_size(WORKGROUP)
 fn main(@builtin(local_invocation_index) lid: u32) {
     var wave = params.wave;
@@ -36,18 +34,12 @@ fn main(@builtin(local_invocation_index) lid: u32) {
     loop {
         // The candidates stored by the wave before (or the dispatches before) are visible.
         storageBarrier();
-        if lid == 0u {
-            wave_items = atomicLoad(&wave_state[CANDIDATE_COUNT + (wave & 1u)]);
-        }
-        let candidates = workgroupUniformLoad(&wave_items);
+        let candidates = state_word(lid, CANDIDATE_COUNT + (wave & 1u));
         for (var i = lid; i < candidates; i += WORKGROUP) {
             find_candidate(lists[candidates_base(wave) + i], wave);
         }
         storageBarrier();
-        if lid == 0u {
-            wave_items = atomicLoad(&wave_state[OPS_COUNT]);
-        }
-        let treelets = workgroupUniformLoad(&wave_items);
+        let treelets = state_word(lid, OPS_COUNT);
         if treelets == 0u {
             break;
         }
@@ -57,8 +49,7 @@ fn main(@builtin(local_invocation_index) lid: u32) {
         storageBarrier();
         workgroupBarrier();
         if lid == 0u {
-            atomicStore(&wave_state[CANDIDATE_COUNT + (wave & 1u)], 0u);
-            atomicStore(&wave_state[OPS_COUNT], 0u);
+            end_wave(wave);
         }
         wave++;
     }

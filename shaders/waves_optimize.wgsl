@@ -43,7 +43,6 @@ fn main(
         find_args[0] = args.x;
         find_args[1] = args.y;
         find_args[2] = args.z;
-        atomicStore(&wave_state[CANDIDATE_COUNT + (wave & 1u)], 0u);
-        atomicStore(&wave_state[OPS_COUNT], 0u);
+        end_wave(wave);
     }
 }

@@ -40,14 +40,27 @@ const WAITING: u32 = 2u;
 const WAVE_WORKGROUP: u32 = 32u;
 const MAX_WORKGROUPS_X: u32 = 65535u;
 
-var<workgroup> wave_stopped: u32;
+var<workgroup> state_value: u32;
+
+// Word `word` of the wave state, loaded once for the workgroup (every invocation calls it; two
+// calls need a barrier between them, as the value is shared).
+fn state_word(lid: u32, word: u32) -> u32 {
+    if lid == 0u {
+        state_value = atomicLoad(&wave_state[word]);
+    }
+    return workgroupUniformLoad(&state_value);
+}
 
 // Whether a wave before found no treelet (every invocation calls it).
 fn rounds_stopped(lid: u32) -> bool {
-    if lid == 0u {
-        wave_stopped = atomicLoad(&wave_state[STOPPED]);
-    }
-    return workgroupUniformLoad(&wave_stopped) != 0u;
+    return state_word(lid, STOPPED) != 0u;
+}
+
+// The end of wave `wave`: its candidates (which its first step read) and its treelets, counted
+// no more.
+fn end_wave(wave: u32) {
+    atomicStore(&wave_state[CANDIDATE_COUNT + (wave & 1u)], 0u);
+    atomicStore(&wave_state[OPS_COUNT], 0u);
 }
 
 var<workgroup> is_last: u32;

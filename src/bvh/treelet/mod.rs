@@ -282,7 +282,7 @@ impl TrbvhBuilder {
             lbvh: LbvhBuilder::new(ctx).with_key_bits(TRBVH_KEY_BITS)?,
             presplit: None,
             rounds: TreeletRounds::new(ctx)?,
-            waves: OverlappedRounds::new(ctx),
+            waves: OverlappedRounds::new(),
             collapse: Collapse::new(ctx)?,
             scratch: None,
             last_capacity: 0,
@@ -469,57 +469,52 @@ impl TrbvhBuilder {
             waves: &scratch.waves,
         };
         let model = CostModel::from(&self.sah);
-        let overlap = self
+        let treelet_size = self.settings.treelet_size;
+        let round = |r: usize| Round {
+            model,
+            treelet_size,
+            gamma: gammas[r],
+            next_gamma: gammas.get(r + 1).copied().unwrap_or(u32::MAX),
+            levels_only: r > 0,
+        };
+        // The first round's schedule climbs the LBVH and counts arrivals.
+        rec.encoder().clear_buffer(&scratch.arrivals, 0, None);
+        match self
             .rounds
             .schedule
             .overlap
-            .filter(|_| gammas[0] != u32::MAX);
-        if let Some(reach) = overlap {
-            // The first round's schedule (with the LBVH), then every round in waves.
-            rec.encoder().clear_buffer(&scratch.arrivals, 0, None);
-            rec.encoder().clear_buffer(&scratch.schedule, 0, None);
-            let rounds = gammas.len() as u32;
-            self.waves.reserve(ctx, n, rounds)?;
-            let round = Round {
-                model,
-                treelet_size: self.settings.treelet_size,
-                gamma: gammas[0],
-                next_gamma: u32::MAX,
-                levels_only: false,
-            };
-            let levels = self.rounds.dispatched(n, gammas[0], ctx.info.device_type);
-            let mut pass = rec.pass("treelets");
-            self.rounds
-                .record_levels(&mut pass, ctx, count, &state, &round, levels.max(1));
-            drop(pass);
-            let overlap = Overlap {
-                model,
-                treelet_size: self.settings.treelet_size,
-                rounds,
-                reach,
-                dispatched: levels * rounds,
-                dp: self.rounds.schedule.dp(),
-                climb_dp: self.rounds.schedule.climb_dp(),
-            };
-            self.waves
-                .record(rec, n, &state, self.rounds.roots(), &overlap);
-        }
-        for (r, &gamma) in gammas.iter().enumerate().filter(|_| overlap.is_none()) {
-            if r == 0 {
-                // The first schedule's climb counts arrivals.
-                rec.encoder().clear_buffer(&scratch.arrivals, 0, None);
+            .filter(|_| gammas[0] != u32::MAX)
+        {
+            Some(reach) => {
+                // The first round's schedule (with the LBVH), then every round in waves.
+                rec.encoder().clear_buffer(&scratch.schedule, 0, None);
+                let rounds = gammas.len() as u32;
+                self.waves.reserve(ctx, n, rounds)?;
+                let levels = self.rounds.dispatched(n, gammas[0], ctx.info.device_type);
+                let mut pass = rec.pass("treelets");
+                self.rounds
+                    .record_levels(&mut pass, ctx, count, &state, &round(0), levels.max(1));
+                drop(pass);
+                let overlap = Overlap {
+                    model,
+                    treelet_size,
+                    rounds,
+                    reach,
+                    dispatched: levels * rounds,
+                    dp: self.rounds.schedule.dp(),
+                    climb_dp: self.rounds.schedule.climb_dp(),
+                };
+                self.waves
+                    .record(rec, n, &state, self.rounds.roots(), &overlap);
             }
-            rec.encoder().clear_buffer(&scratch.schedule, 0, None);
-            let round = Round {
-                model,
-                treelet_size: self.settings.treelet_size,
-                gamma,
-                next_gamma: gammas.get(r + 1).copied().unwrap_or(u32::MAX),
-                levels_only: r > 0,
-            };
-            state.levels = &scratch.levels[r % 2];
-            state.next_levels = &scratch.levels[(r + 1) % 2];
-            self.rounds.record(rec, count, &state, &round);
+            None => {
+                for r in 0..gammas.len() {
+                    rec.encoder().clear_buffer(&scratch.schedule, 0, None);
+                    state.levels = &scratch.levels[r % 2];
+                    state.next_levels = &scratch.levels[(r + 1) % 2];
+                    self.rounds.record(rec, count, &state, &round(r));
+                }
+            }
         }
         let mut pass = rec.pass("collapse");
         let out = CollapseBuffers {

@@ -7,6 +7,8 @@
 //! `WorkingTree::optimize_overlapped`, which tests compare it against exactly; selected by
 //! `RoundSchedule::overlap`.
 
+use std::sync::OnceLock;
+
 use super::dp::CostModel;
 use super::dp_unrolled::TreeletDp;
 use super::rounds::{level_start, RoundParams, TreeletKernels, TreeletState, SCHEDULE_ARGS};
@@ -47,7 +49,8 @@ struct WaveBuffers {
 
 /// The overlapped rounds' kernels and scratch, reused per build.
 pub(crate) struct OverlappedRounds {
-    find: Kernel<RoundParams>,
+    /// Compiled when first used: a build that never overlaps its rounds never needs it.
+    find: OnceLock<Kernel<RoundParams>>,
     optimize: TreeletKernels,
     climb: TreeletKernels,
     buffers: Option<WaveBuffers>,
@@ -66,9 +69,9 @@ pub(crate) struct Overlap {
 }
 
 impl OverlappedRounds {
-    pub fn new(ctx: &GpuContext) -> Self {
+    pub fn new() -> Self {
         Self {
-            find: Kernel::new(ctx, &WAVES_FIND),
+            find: OnceLock::new(),
             optimize: TreeletKernels::new(&WAVES_OPTIMIZE),
             climb: TreeletKernels::new(&WAVES_CLIMB),
             buffers: None,
@@ -171,11 +174,12 @@ impl OverlappedRounds {
         ];
         let mut optimize_buffers = climb_buffers.to_vec();
         optimize_buffers.push(&b.find_args);
+        let find = self.find.get_or_init(|| Kernel::new(ctx, &WAVES_FIND));
         let optimize = self.optimize.get(ctx, overlap.treelet_size, overlap.dp);
         let mut pass = rec.pass("treelets");
         for wave in 1..=overlap.dispatched {
             let params = params(wave);
-            pass.dispatch_indirect(&self.find, &b.find_args, 0, &params, &find_buffers);
+            pass.dispatch_indirect(find, &b.find_args, 0, &params, &find_buffers);
             pass.dispatch_indirect(optimize, &b.optimize_args, 0, &params, &optimize_buffers);
         }
         drop(pass);
