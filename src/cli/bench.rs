@@ -145,10 +145,11 @@ impl BenchArgs {
                 ("--round-overlap", !self.round_overlap.is_empty()),
             ],
         )?;
-        let overlaps = match self.round_overlap.as_slice() {
-            [] => vec![None],
-            reaches => reaches.iter().map(|r| r.0).collect(),
-        };
+        // No `--round-overlap` and `none` both mean one round after another.
+        let overlaps: Vec<Option<u32>> = or_default(&self.round_overlap)
+            .into_iter()
+            .map(|reach| reach.and_then(|r| r.0))
+            .collect();
         let mut schedules = Vec::new();
         for level_dispatches in or_default(&self.level_dispatches) {
             for team_below in or_default(&self.team_below) {
