@@ -266,6 +266,58 @@ fn bench_round_overlap_reports_each_reach() {
     assert_eq!(records[1]["nodes"], records[0]["nodes"]);
 }
 
+/// `bench --tune-schedule on` tunes trbvh's schedule from the one given (`--round-overlap none`
+/// stays as given): it lists every trial with both medians, no schedule built another tree, the
+/// schedule reported is the last one kept (or the one given), and the tree is the untuned one's.
+/// Without the option a CPU device does not tune (auto).
+#[test]
+fn bench_tunes_the_schedule_on_request() {
+    let untuned = quick_bench("trbvh", &[]);
+    assert!(untuned[0]["schedule_tuning"].is_null());
+    let tuned = quick_bench(
+        "trbvh",
+        &[
+            "--tune-schedule",
+            "on",
+            "--tune-pairs",
+            "1",
+            "--round-overlap",
+            "none",
+        ],
+    );
+    let record = &tuned[0];
+    let trials = record["schedule_tuning"]["trials"].as_array().unwrap();
+    // The DP forms (2), the team thresholds (3) and the level dispatches (2) at least.
+    assert!(trials.len() >= 7, "{trials:?}");
+    for trial in trials {
+        assert_eq!(trial["other_tree"], false, "{trial}");
+        assert!(trial["kept_ms"].as_f64().unwrap() > 0.0);
+        assert!(trial["candidate_ms"].as_f64().unwrap() > 0.0);
+        assert!(!trial["schedule"].as_str().unwrap().contains("overlap"));
+    }
+    let kept = trials
+        .iter()
+        .rev()
+        .find(|t| t["adopted"] == true)
+        .map_or("default", |t| t["schedule"].as_str().unwrap());
+    let parts: Vec<&str> = kept.split(' ').collect();
+    let team_below = parts
+        .iter()
+        .find_map(|p| p.strip_prefix("t="))
+        .map_or(0, |t| t.parse().unwrap());
+    assert_eq!(record["team_below"], team_below, "{kept} {record}");
+    let dp = if parts.contains(&"dp=loop") {
+        "loop"
+    } else {
+        "unrolled"
+    };
+    assert_eq!(record["treelet_dp"], dp, "{kept} {record}");
+    assert!(record["round_overlap"].is_null());
+    assert_eq!(record["valid"], true);
+    assert_eq!(record["sah"], untuned[0]["sah"]);
+    assert_eq!(record["nodes"], untuned[0]["nodes"]);
+}
+
 /// `bench --wide-level-dispatches` converts the same tree with every split of the wide levels
 /// between indirect dispatches and the one-workgroup finish (the root's dispatch and the finish
 /// always run), reports the count asked for, and is refused without the wide layout.
@@ -537,7 +589,7 @@ fn overflowing_triangles_are_reported_as_such() {
 
 #[test]
 fn options_of_other_builders_are_refused() {
-    let cases: [(&[&str], &str); 10] = [
+    let cases: [(&[&str], &str); 12] = [
         (
             &["render", "--builder", "sweep", "--treelet-size", "99"],
             "--treelet-size does not apply to builder sweep",
@@ -573,6 +625,14 @@ fn options_of_other_builders_are_refused() {
         (
             &["bench", "--builder", "trbvh", "--round-overlap", "far"],
             "'far' is neither a number of levels nor none",
+        ),
+        (
+            &["bench", "--builder", "lbvh,sweep", "--tune-schedule", "on"],
+            "--tune-schedule on does not apply to builder lbvh, sweep",
+        ),
+        (
+            &["bench", "--builder", "trbvh", "--tune-pairs", "0"],
+            "invalid value '0' for '--tune-pairs",
         ),
         (
             &["bench", "--builder", "trbvh", "--split-budget", "0.3"],

@@ -15,9 +15,12 @@ use treelet::bvh::treelet::{
     RoundSchedule, TrbvhBuilder, TreeletDp, TreeletLeaf, TreeletSettings, WorkingTree,
     MAX_LEVEL_DISPATCHES,
 };
-use treelet::bvh::{sah_cost, validate, validate_with_references, Bvh, SahParams};
+use treelet::bvh::wide::{Layout, WideOptions};
+use treelet::bvh::{
+    sah_cost, validate, validate_with_references, Builder, Bvh, SahParams, TuningOptions,
+};
 use treelet::device::{Geometry, Tree};
-use treelet::gpu::GpuContext;
+use treelet::gpu::{GpuContext, Timing};
 use treelet::scene::{load_scene, Triangle};
 use treelet::trace::closest_hits;
 
@@ -708,6 +711,60 @@ fn repeated_builds_are_identical_and_valid() {
         let bvh = tree.download(gpu()).unwrap();
         assert!(bvh == first, "build {round} differs from the first");
     }
+}
+
+/// A tuning of trbvh-split's schedule (every dimension free, one pair per comparison): every
+/// trial built the default schedule's tree, every dimension was tried, and the tree built with
+/// the schedule kept is the untuned one's.
+#[test]
+fn a_tuned_schedule_builds_the_untuned_tree() {
+    let sah = SahParams::default();
+    let scene = scene_of(random_soup(4000, 78));
+    let builder = Builder::TrbvhSplit(TreeletSettings {
+        split_percent: 30,
+        ..TreeletSettings::BALANCED
+    });
+    let build = |tuning: Option<&TuningOptions>| {
+        builder
+            .build(
+                gpu(),
+                &scene,
+                &sah,
+                &Timing::quick(1),
+                Layout::Binary,
+                WideOptions::default(),
+                RoundSchedule::default(),
+                tuning,
+            )
+            .unwrap()
+    };
+    let (_, untuned, report) = build(None);
+    assert!(report.tuned.is_none());
+    let options = TuningOptions {
+        pairs: 1,
+        max_descents: 1,
+        ..TuningOptions::default()
+    };
+    let (_, tuned_tree, report) = build(Some(&options));
+    let tuned = report.tuned.expect("a tuning");
+    assert!(tuned.trials.iter().all(|t| !t.other_tree), "{tuned:?}");
+    let tried = |f: &dyn Fn(&RoundSchedule) -> bool| tuned.trials.iter().any(|t| f(&t.candidate));
+    assert!(tried(&|s| s.overlap.is_some()));
+    assert!(tried(&|s| s.dp() == TreeletDp::Loop));
+    assert!(tried(&|s| s.climb_dp() == TreeletDp::Loop));
+    assert!(tried(&|s| s.level_dispatches.is_some()));
+    assert!(tried(&|s| s.team_below() != 0) || tuned.trials[0].adopted);
+    assert!(tuned.builds as usize >= 3 * tuned.trials.len());
+    let (want, got) = (
+        untuned.download(gpu()).unwrap(),
+        tuned_tree.download(gpu()).unwrap(),
+    );
+    assert!(
+        got == want,
+        "schedule [{}] built another tree",
+        tuned.schedule.label()
+    );
+    validate_with_references(&got, &scene.triangles).unwrap();
 }
 
 #[test]

@@ -398,6 +398,7 @@ fn any_hit_respects_the_interval() {
             Layout::Wide,
             WideOptions::default(),
             RoundSchedule::default(),
+            None,
         )
         .unwrap();
     for any in [

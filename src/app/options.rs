@@ -1,5 +1,6 @@
 //! What the command line asks of the viewer: the first scene and builder, the adapter, the window
-//! size, and the automation flags used by scripts (screenshot after N frames, then exit).
+//! size, the schedule tuning, and the automation flags used by scripts (screenshot after N
+//! frames, then exit).
 
 use std::path::PathBuf;
 
@@ -22,6 +23,9 @@ pub struct ViewerOptions {
     pub screenshot: Option<PathBuf>,
     /// Exit (status 0) after this many presented frames.
     pub exit_after_frames: Option<u64>,
+    /// Tune a treelet builder's schedule: at its first frame (true), only on request (false), or
+    /// None: on a GPU after a few seconds of frames.
+    pub tune_schedule: Option<bool>,
 }
 
 /// The viewer's builder when none is asked for: the paper's (trbvh, balanced) on a GPU; lbvh on a

@@ -1,8 +1,9 @@
 //! The egui side panel: device, performance (frame time plot, Mrays/s), scene and tree statistics,
 //! animation playback (play/pause/step/speed/seek, animate time, the SAH-over-time plot of rebuild
-//! versus refit), the traced node layout and its size, per-stage build times, SAH against the CPU
-//! sweep reference, and the controls (scene, builder or refit, node layout, leaf size, samples per
-//! frame, bounces, per-frame rebuild, camera reset, screenshot). It only edits `PanelControls`
+//! versus refit), the traced node layout and its size, a treelet builder's schedule and its last
+//! tuning, per-stage build times, SAH against the CPU sweep reference, and the controls (scene,
+//! builder or refit, node layout, leaf size, schedule tuning, samples per frame, bounces,
+//! per-frame rebuild, camera reset, screenshot). It only edits `PanelControls`
 //! and returns `PanelActions`; the viewer applies them.
 
 use egui::{Color32, RichText};
@@ -14,8 +15,9 @@ use super::settings::ViewSettings;
 use super::stats::BuildTiming;
 use super::stats::FrameStats;
 use crate::anim::{AnimateStage, ANIMATIONS};
+use crate::bvh::treelet::RoundSchedule;
 use crate::bvh::wide::{Layout, WideCollapse, WideNode, WIDTH};
-use crate::bvh::{Builder, BvhNode, UpdateMode};
+use crate::bvh::{Builder, BvhNode, TunedSchedule, UpdateMode};
 use crate::scene::SCENES;
 
 /// Width of the panel in points.
@@ -48,6 +50,14 @@ pub struct PanelInfo<'a> {
     pub screenshot: Option<&'a str>,
     /// The animation of an animated scene.
     pub animation: Option<AnimationInfo<'a>>,
+    /// A treelet builder's schedule (None for other builders and refits).
+    pub schedule: Option<ScheduleInfo<'a>>,
+}
+
+/// The treelet rounds' schedule in use, and the last tuning with the scene it ran on.
+pub struct ScheduleInfo<'a> {
+    pub current: RoundSchedule,
+    pub tuned: Option<(&'a TunedSchedule, &'a str)>,
 }
 
 /// Read-only facts about the animation of an animated scene.
@@ -78,6 +88,8 @@ pub struct PanelActions {
     pub screenshot: bool,
     /// Animation clock: single step or seek.
     pub clock: ClockRequest,
+    /// Tune the treelet builder's schedule now.
+    pub tune_schedule: bool,
 }
 
 /// Draws the panel at the left of `ui`.
@@ -101,7 +113,7 @@ pub fn show(ui: &mut egui::Ui, info: &PanelInfo, controls: &mut PanelControls) -
                     if let Some(animation) = &info.animation {
                         self::animation(ui, animation, &mut controls.playback, &mut actions);
                     }
-                    bvh(ui, info, &mut controls.settings);
+                    bvh(ui, info, &mut controls.settings, &mut actions);
                     render(ui, &mut controls.settings, &mut actions, info);
                 });
         });
@@ -283,7 +295,12 @@ fn layout_detail(layout: Layout) -> String {
     }
 }
 
-fn bvh(ui: &mut egui::Ui, info: &PanelInfo, settings: &mut ViewSettings) {
+fn bvh(
+    ui: &mut egui::Ui,
+    info: &PanelInfo,
+    settings: &mut ViewSettings,
+    actions: &mut PanelActions,
+) {
     section(ui, "BVH");
     let mut builder = settings.builder;
     // Animated scenes: GPU rebuilds and the refits (CPU builders would need CPU triangles).
@@ -354,8 +371,52 @@ fn bvh(ui: &mut egui::Ui, info: &PanelInfo, settings: &mut ViewSettings) {
         egui::Slider::new(&mut settings.max_leaf_size, 1..=ViewSettings::MAX_LEAF_SIZE)
             .text("max leaf size"),
     );
+    if let Some(schedule) = &info.schedule {
+        self::schedule(ui, schedule, actions);
+    }
     build_times(ui, info.stats, settings.rebuilds_every_frame());
     sah(ui, info);
+}
+
+/// The treelet rounds' schedule, its last tuning and the button that tunes it.
+fn schedule(ui: &mut egui::Ui, info: &ScheduleInfo, actions: &mut PanelActions) {
+    ui.label(format!("schedule: {}", info.current.label()));
+    if let Some((tuned, scene)) = info.tuned {
+        let start_ms = tuned.trials.first().and_then(|t| t.kept_ms);
+        let kept_ms = tuned
+            .trials
+            .iter()
+            .rev()
+            .find(|t| t.adopted)
+            .and_then(|t| t.candidate_ms)
+            .or(start_ms);
+        let mut text = format!(
+            "tuned on {scene}: {} trials, {} builds",
+            tuned.trials.len(),
+            tuned.builds
+        );
+        if let (Some(start), Some(kept)) = (start_ms, kept_ms) {
+            text += &format!(", {start:.2} ms to {kept:.2} ms");
+        }
+        ui.label(text);
+        let refused = tuned.trials.iter().filter(|t| t.other_tree).count();
+        if refused > 0 {
+            ui.colored_label(
+                ERROR_RED,
+                format!("{refused} schedules built another tree (a device bug; not used)"),
+            );
+        }
+    }
+    let tune = ui.button("Tune schedule").on_hover_text(
+        "Time the treelet rounds' schedules on this device and scene and keep the fastest \
+         (rounds overlapped or one after another, DP forms, teams, dispatched levels): every \
+         schedule builds the same tree, which the tuning checks. Waits for about a hundred \
+         builds (on a GPU a second or less; on a CPU device up to minutes); on a GPU it runs \
+         once by itself a few seconds after a treelet builder starts",
+    );
+    if tune.clicked() {
+        actions.tune_schedule = true;
+    }
 }
 
 fn animation(

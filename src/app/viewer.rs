@@ -19,6 +19,11 @@
 //! window's measurements. User errors (an unloadable file, a scene too large for the device) are
 //! shown in the panel; the previous scene stays and the viewer keeps running. Displaying the
 //! image and the panel is `window_app`'s part.
+//!
+//! On a GPU a treelet builder's schedule is tuned once its updater has run `AUTO_TUNE_FRAMES`
+//! frames (the clocks are up by then; `bvh::tune_schedule`, which waits for its builds: about a
+//! hundred of them, a second or less), at once where `--tune-schedule on` asks, and again on the
+//! panel's request; every schedule builds the same tree, so only the build times change.
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -28,7 +33,9 @@ use super::camera_control::CameraInput;
 use super::display::PixelRect;
 use super::frame_readback::{FrameReadback, FrameRecord, FrameResult};
 use super::options::{default_update_mode, ViewerOptions};
-use super::panel::{self, AnimationInfo, PanelActions, PanelControls, PanelInfo, SAH_INTERVAL_S};
+use super::panel::{
+    self, AnimationInfo, PanelActions, PanelControls, PanelInfo, ScheduleInfo, SAH_INTERVAL_S,
+};
 use super::playback::{ClockRequest, Playback};
 use super::sah_reference::{ReferenceKey, SahReference};
 use super::settings::ViewSettings;
@@ -36,13 +43,19 @@ use super::stats::{BuildTiming, FrameStats, TreeSah};
 use super::tradeoff_panel::{StudyScene, TradeoffPanel};
 use super::tree_snapshot::TreeSnapshot;
 use crate::anim::{is_animation, load_animation};
+use crate::bvh::treelet::RoundSchedule;
 use crate::bvh::wide::Layout;
-use crate::bvh::{Builder, TreeUpdater, UpdateMode};
+use crate::bvh::{
+    tune_schedule, Builder, DeviceTrials, TreeUpdater, TunedSchedule, TuningOptions, UpdateMode,
+};
 use crate::device::{Geometry, Tree};
 use crate::gpu::{GpuContext, ParamSlab, Recorder};
 use crate::scene::{load_scene, Camera, Scene};
 use crate::trace::{PathTracer, RenderSettings};
 use crate::Result;
+
+/// Frames a GPU's treelet updater runs before its schedule is tuned.
+const AUTO_TUNE_FRAMES: u64 = 120;
 
 /// The current tree's SAH needs measuring: now (a new tree) or when the interval has passed
 /// (the same tree rebuilt; animated scenes will change it between frames).
@@ -93,6 +106,12 @@ pub struct Viewer {
     /// A copy of the traced tree on its way back for its SAH cost.
     sah_snapshot: Option<TreeSnapshot>,
     sah_pending: bool,
+    /// The last schedule tuning of the current updater and the scene it ran on.
+    tuned: Option<(TunedSchedule, String)>,
+    /// The frame at which the current updater's schedule is tuned (None: done, or not asked).
+    auto_tune_at: Option<u64>,
+    /// `ViewerOptions::tune_schedule`.
+    tune_option: Option<bool>,
 }
 
 impl Viewer {
@@ -139,7 +158,11 @@ impl Viewer {
             frame_readback: FrameReadback::new(ctx),
             sah_snapshot: None,
             sah_pending: false,
+            tuned: None,
+            auto_tune_at: None,
+            tune_option: options.tune_schedule,
         };
+        viewer.new_updater(ctx);
         viewer.stats.build = Some(loaded.timing);
         viewer.request_reference();
         Ok(viewer)
@@ -173,6 +196,10 @@ impl Viewer {
             reference: self.reference.state(),
             error: self.error.as_deref(),
             screenshot: self.screenshot_message.as_deref(),
+            schedule: self.updater.tunable_schedule().map(|current| ScheduleInfo {
+                current,
+                tuned: self.tuned.as_ref().map(|(t, scene)| (t, scene.as_str())),
+            }),
             animation: self.animated.as_ref().map(|a| AnimationInfo {
                 clock: a.clock,
                 stage: a.stage(),
@@ -209,6 +236,10 @@ impl Viewer {
             self.something_changed();
         }
         self.apply_settings(ctx);
+        let auto_tune = self.auto_tune_at.is_some_and(|at| self.stats.frames >= at);
+        if actions.tune_schedule || auto_tune {
+            self.tune_schedule(ctx);
+        }
         self.fit_tracer(ctx);
         if self.halted {
             return;
@@ -468,6 +499,7 @@ impl Viewer {
                     updater.set_wide_collapse(self.applied.wide_collapse);
                     updater.set_layout(ctx, self.applied.layout);
                     self.updater = updater;
+                    self.new_updater(ctx);
                     self.applied.select_builder(mode);
                     self.controls.settings.select_builder(mode);
                 }
@@ -522,6 +554,7 @@ impl Viewer {
                     updater.set_wide_collapse(wanted.wide_collapse);
                     updater.set_layout(ctx, wanted.layout);
                     self.updater = updater;
+                    self.new_updater(ctx);
                     self.tree_dirty = true;
                 }
                 Err(e) => {
@@ -549,6 +582,72 @@ impl Viewer {
         self.applied = wanted;
         self.request_reference();
         self.something_changed();
+    }
+
+    /// A new updater: no tuning yet; one at its next frame where asked, or after
+    /// `AUTO_TUNE_FRAMES` frames on a GPU by default.
+    fn new_updater(&mut self, ctx: &GpuContext) {
+        self.tuned = None;
+        let gpu = ctx.info.device_type != wgpu::DeviceType::Cpu;
+        let delay = match self.tune_option {
+            Some(true) => Some(0),
+            Some(false) => None,
+            None => gpu.then_some(AUTO_TUNE_FRAMES),
+        };
+        self.auto_tune_at = delay
+            .filter(|_| self.updater.tunable_schedule().is_some())
+            .map(|d| self.stats.frames + d);
+    }
+
+    /// Tunes the treelet rounds' schedule on the current geometry (see the module header); a
+    /// failure shows in the panel and keeps the schedule.
+    fn tune_schedule(&mut self, ctx: &GpuContext) {
+        self.auto_tune_at = None;
+        let (Some(start), Some(settings)) = (
+            self.updater.tunable_schedule(),
+            self.updater.mode().builder().treelet_settings(),
+        ) else {
+            return;
+        };
+        let default_levels = RoundSchedule::default_level_dispatches(
+            self.geometry.triangle_count,
+            settings.treelet_size,
+            ctx.info.device_type,
+        );
+        let tuned = DeviceTrials::new(
+            ctx,
+            &mut self.updater,
+            &self.geometry,
+            &self.scene.triangles,
+            &mut self.tree,
+            start,
+        )
+        .and_then(|mut trials| {
+            tune_schedule(
+                &mut trials,
+                start,
+                default_levels,
+                &TuningOptions::default(),
+            )
+        });
+        match tuned {
+            Ok(tuned) => {
+                log::info!(
+                    "viewer: schedule [{}] kept after {} builds in {:.0} ms",
+                    tuned.schedule.label(),
+                    tuned.builds,
+                    tuned.wall_ms
+                );
+                self.updater.set_round_schedule(tuned.schedule);
+                self.tuned = Some((tuned, self.scene.name.clone()));
+            }
+            Err(e) => {
+                self.updater.set_round_schedule(start);
+                self.error = Some(format!("schedule tuning failed: {e}"));
+            }
+        }
+        // The tuning's builds left the same tree; the next frame builds it as usual.
+        self.tree_dirty = true;
     }
 
     fn request_reference(&mut self) {

@@ -5,12 +5,13 @@
 use std::time::Instant;
 
 use super::treelet::{RoundSchedule, TreeletSettings};
+use super::tuning::{tune_schedule, DeviceTrials, TunedSchedule, TuningOptions};
 use super::update::{TreeUpdater, UpdateMode};
 use super::wide::{check_leaf_sizes, Layout, WideConverter, WideOptions};
 use super::{build_sbvh, build_sweep_sah, Bvh, SahParams};
 use crate::device::{Geometry, Tree};
 use crate::gpu::{GpuContext, GpuTimer, ParamSlab, Recorder, StageTime, Timing, Warmup};
-use crate::scene::Scene;
+use crate::scene::{Scene, Triangle};
 use crate::{Error, Result};
 
 /// A BVH construction method, selectable by name on the command line.
@@ -42,6 +43,8 @@ pub struct BuildReport {
     pub stages: Vec<StageTime>,
     pub builds_ms: Vec<f64>,
     pub warmup: Warmup,
+    /// Treelet builders built with a tuned schedule: the tuning (its schedule is the one timed).
+    pub tuned: Option<TunedSchedule>,
 }
 
 impl Builder {
@@ -138,7 +141,8 @@ impl Builder {
     /// median time; the wide layout's conversion is one of their stages ("wide"). CPU builders
     /// are timed once, and their upload is converted once on the GPU (timed as "wide").
     /// `wide` sets the wide conversion (its collapse and level dispatches); `schedule` spreads the
-    /// treelet rounds over the device (trbvh, trbvh-split).
+    /// treelet rounds over the device (trbvh, trbvh-split); with `tuning`, treelet builders tune
+    /// the schedule from it after the warm-up (`tune_schedule`) and time the one they keep.
     #[allow(clippy::too_many_arguments)]
     pub fn build(
         self,
@@ -149,6 +153,7 @@ impl Builder {
         layout: Layout,
         wide: WideOptions,
         schedule: RoundSchedule,
+        tuning: Option<&TuningOptions>,
     ) -> Result<(Geometry, Tree, BuildReport)> {
         let geometry = Geometry::upload(ctx, scene)?;
         match self {
@@ -170,26 +175,59 @@ impl Builder {
                 updater.set_wide_options(wide);
                 updater.set_layout(ctx, layout);
                 updater.set_round_schedule(schedule);
-                let passes = updater.pass_count();
                 let mut slab = ParamSlab::new(ctx);
-                let mut build_once = |timer: Option<&mut GpuTimer>| -> Result<()> {
-                    let mut rec = Recorder::new(ctx, &mut slab, timer);
-                    let result = updater.record(&mut rec, &geometry, &scene.triangles, &mut tree);
-                    rec.submit();
-                    result.map(drop)
-                };
+                let triangles = &scene.triangles;
                 let warmup = timing.warm_up(|| {
-                    build_once(None)?;
+                    build_once(
+                        ctx,
+                        &mut slab,
+                        &mut updater,
+                        &geometry,
+                        triangles,
+                        &mut tree,
+                        None,
+                    )?;
                     ctx.device
                         .poll(wgpu::PollType::wait_indefinitely())
                         .map_err(|e| Error::Gpu(format!("device poll failed: {e}")))
                         .map(drop)
                 })?;
+                let tuned = match (tuning, self.treelet_settings()) {
+                    (Some(options), Some(settings)) => {
+                        let prims = triangles.len().try_into().unwrap_or(u32::MAX);
+                        let default_levels = RoundSchedule::default_level_dispatches(
+                            prims,
+                            settings.treelet_size,
+                            ctx.info.device_type,
+                        );
+                        let mut trials = DeviceTrials::new(
+                            ctx,
+                            &mut updater,
+                            &geometry,
+                            triangles,
+                            &mut tree,
+                            schedule,
+                        )?;
+                        let tuned = tune_schedule(&mut trials, schedule, default_levels, options)?;
+                        updater.set_round_schedule(tuned.schedule);
+                        Some(tuned)
+                    }
+                    _ => None,
+                };
+                let passes = updater.pass_count();
                 let mut reports = Vec::new();
                 for _ in 0..timing.repeats.max(1) {
                     let mut timer = GpuTimer::new(ctx, passes);
                     let start = Instant::now();
-                    build_once(Some(&mut timer))?;
+                    build_once(
+                        ctx,
+                        &mut slab,
+                        &mut updater,
+                        &geometry,
+                        triangles,
+                        &mut tree,
+                        Some(&mut timer),
+                    )?;
                     let stages = timer.read(ctx)?;
                     let wall_ms = start.elapsed().as_secs_f64() * 1e3;
                     let gpu_ms: Option<f64> = stages.iter().map(|s| s.ms).sum();
@@ -209,12 +247,29 @@ impl Builder {
                     BuildReport {
                         builds_ms,
                         warmup,
+                        tuned,
                         ..median
                     },
                 ))
             }
         }
     }
+}
+
+/// Records one update of `tree` by `updater` and submits it (timed by `timer` where given).
+fn build_once(
+    ctx: &GpuContext,
+    slab: &mut ParamSlab,
+    updater: &mut TreeUpdater,
+    geometry: &Geometry,
+    triangles: &[Triangle],
+    tree: &mut Tree,
+    timer: Option<&mut GpuTimer>,
+) -> Result<()> {
+    let mut rec = Recorder::new(ctx, slab, timer);
+    let result = updater.record(&mut rec, geometry, triangles, tree);
+    rec.submit();
+    result.map(drop)
 }
 
 /// The wide conversion of `layout` (none for the binary layout).
@@ -261,6 +316,7 @@ fn cpu_build(
         stages,
         builds_ms: vec![build_ms],
         warmup: Warmup::default(),
+        tuned: None,
     };
     Ok((geometry, tree, report))
 }

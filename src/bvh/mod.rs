@@ -13,6 +13,7 @@ mod sweep;
 mod topdown;
 mod traverse;
 pub mod treelet;
+mod tuning;
 mod update;
 mod validate;
 pub mod wide;
@@ -24,5 +25,9 @@ pub use nodes_refit::{derive_refit_links, parents_and_leaves, NodesRefit, NODES_
 pub use sah::{sah_cost, SahParams};
 pub use sbvh::build_sbvh;
 pub use sweep::build_sweep_sah;
+pub use tuning::{
+    tune_schedule, DeviceTrials, SchedulePins, ScheduleTrial, ScheduleTrials, TunedSchedule,
+    TuningOptions,
+};
 pub use update::{TreeUpdater, UpdateMode};
 pub use validate::{validate, validate_with_references, ValidationError, ValidationStats};

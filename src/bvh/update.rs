@@ -201,6 +201,16 @@ impl TreeUpdater {
         }
     }
 
+    /// The treelet rounds' schedule of a rebuild by trbvh or trbvh-split, the one a schedule
+    /// tuning (`tune_schedule`) may change; None for other modes (refits included: their
+    /// topology is built once).
+    pub fn tunable_schedule(&self) -> Option<RoundSchedule> {
+        match &self.producer {
+            Producer::Trbvh(b) if !self.mode.is_refit() => Some(b.schedule()),
+            _ => None,
+        }
+    }
+
     /// SAH parameters of the next builds (treelet builders' cost model and max leaf size; CPU
     /// builders' too).
     pub fn set_sah_params(&mut self, sah: SahParams) {

@@ -16,14 +16,15 @@ use treelet::bvh::wide::{
     WideOptions, MAX_WIDE_LEVEL_DISPATCHES,
 };
 use treelet::bvh::{
-    sah_cost, validate, validate_with_references, write_bvh, write_wide_bvh, Builder,
+    sah_cost, validate, validate_with_references, write_bvh, write_wide_bvh, Builder, SchedulePins,
+    TunedSchedule, TuningOptions,
 };
 use treelet::gpu::{aggregate_stages, check_climb_width, GpuContext, Spread, Timing, Warmup};
 use treelet::sort::check_tile_items;
 use treelet::trace::{PathTracer, TraceStats};
 use treelet::Result;
 
-use super::{parse_builder, refuse_treelet_options, TraceArgs};
+use super::{parse_builder, refuse_treelet_options, TraceArgs, TuneSchedule};
 
 #[derive(Args, Debug)]
 pub struct BenchArgs {
@@ -75,6 +76,18 @@ pub struct BenchArgs {
     /// default: one round after another); trbvh, trbvh-split; a comma-separated list to compare
     #[arg(long, value_delimiter = ',')]
     round_overlap: Vec<Reach>,
+    /// Tune the treelet rounds' schedule on this device and scene after the warm-up and before
+    /// the timed builds: the options above left unset are varied one at a time from their
+    /// defaults (every schedule builds the same tree, which the tuning checks) and the fastest
+    /// schedule is kept and timed; `schedule_tuning` in the JSON lists the trials. auto (the
+    /// default): on GPUs when no schedule option above is given, off on CPU devices (where a
+    /// tuning takes minutes); on; off. trbvh, trbvh-split
+    #[arg(long, value_enum, default_value_t = TuneSchedule::Auto)]
+    tune_schedule: TuneSchedule,
+    /// Builds of each schedule per comparison of a tuning (alternating with the schedule kept)
+    #[arg(long, default_value_t = TuningOptions::default().pairs,
+          value_parser = clap::value_parser!(u32).range(1..))]
+    tune_pairs: u32,
     /// Levels of the wide conversion below the root's dispatch given an indirect dispatch of
     /// their own, 0-32, the deeper ones emitted by one workgroup (wide layout; default: log2 of
     /// the references + 2 on GPUs); a comma-separated list to compare. The tree is the same for
@@ -143,6 +156,7 @@ impl BenchArgs {
                 ("--treelet-dp", !self.treelet_dp.is_empty()),
                 ("--climb-dp", !self.climb_dp.is_empty()),
                 ("--round-overlap", !self.round_overlap.is_empty()),
+                ("--tune-schedule on", self.tune_schedule == TuneSchedule::On),
             ],
         )?;
         // No `--round-overlap` and `none` both mean one round after another.
@@ -169,6 +183,30 @@ impl BenchArgs {
             }
         }
         Ok(schedules)
+    }
+
+    /// The tuning of the treelet builders' schedules (None: they are timed as given): the
+    /// dimensions set by an option stay as given.
+    fn tuning(&self, gpu: &GpuContext) -> Option<TuningOptions> {
+        let pins = SchedulePins {
+            overlap: !self.round_overlap.is_empty(),
+            dp: !self.treelet_dp.is_empty(),
+            climb_dp: !self.climb_dp.is_empty(),
+            team_below: !self.team_below.is_empty(),
+            level_dispatches: !self.level_dispatches.is_empty(),
+        };
+        let tune = match self.tune_schedule {
+            TuneSchedule::On => true,
+            TuneSchedule::Off => false,
+            TuneSchedule::Auto => {
+                gpu.info.device_type != wgpu::DeviceType::Cpu && pins == SchedulePins::default()
+            }
+        };
+        tune.then_some(TuningOptions {
+            pairs: self.tune_pairs,
+            pins,
+            ..TuningOptions::default()
+        })
     }
 
     /// The wide conversion's level dispatch counts asked for (None: the default), refused
@@ -223,6 +261,9 @@ struct BenchRecord {
     /// Treelet builders: the rounds' overlap reach (`--round-overlap`; null: one round after
     /// another).
     round_overlap: Option<u32>,
+    /// Treelet builders whose schedule was tuned (`--tune-schedule`): the tuning, whose kept
+    /// schedule is the one in the fields above and timed here.
+    schedule_tuning: Option<TuningRecord>,
     /// The radix sort's keys per invocation asked for (null: chosen per sort).
     sort_tile_items: Option<u32>,
     /// The climbs' workgroup width in effect.
@@ -284,6 +325,46 @@ struct BenchRecord {
     mrays_per_s_spread: Option<Spread>,
 }
 
+/// A schedule tuning in the JSON: its builds and wall-clock time, and every trial in order.
+#[derive(Serialize)]
+struct TuningRecord {
+    builds: u32,
+    wall_ms: f64,
+    trials: Vec<TrialRecord>,
+}
+
+/// A trial of a tuning: the candidate schedule (as in run labels), the median builds of the
+/// schedule kept at the time and of the candidate over the same pairs (null: not timed), whether
+/// it built another tree (refused) and whether it was kept.
+#[derive(Serialize)]
+struct TrialRecord {
+    schedule: String,
+    kept_ms: Option<f64>,
+    candidate_ms: Option<f64>,
+    other_tree: bool,
+    adopted: bool,
+}
+
+impl From<&TunedSchedule> for TuningRecord {
+    fn from(tuned: &TunedSchedule) -> Self {
+        Self {
+            builds: tuned.builds,
+            wall_ms: tuned.wall_ms,
+            trials: tuned
+                .trials
+                .iter()
+                .map(|t| TrialRecord {
+                    schedule: t.candidate.label(),
+                    kept_ms: t.kept_ms,
+                    candidate_ms: t.candidate_ms,
+                    other_tree: t.other_tree,
+                    adopted: t.adopted,
+                })
+                .collect(),
+        }
+    }
+}
+
 /// A radix sort tile's keys per invocation: one of `SORT_TILE_ITEMS`.
 fn parse_sort_tile_items(value: &str) -> std::result::Result<u32, String> {
     let items = value.parse().map_err(|e| format!("{e}"))?;
@@ -318,6 +399,7 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
     let collapses = args.trace.wide_collapses()?;
     let schedules = args.schedules(&builders)?;
     let wide_level_dispatches = args.wide_level_dispatches(layouts)?;
+    let tuning = args.tuning(gpu);
     // The binary layout once, the wide layout once per collapse and level dispatch count.
     let layout_runs: Vec<(Layout, WideOptions)> = layouts
         .iter()
@@ -359,7 +441,10 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
             layout,
             wide_options,
             schedule,
+            tuning.as_ref(),
         )?;
+        // The schedule timed: the tuned one where the schedule was tuned.
+        let schedule = report.tuned.as_ref().map_or(schedule, |t| t.schedule);
         let bvh = tree.download(gpu)?;
         let collapse = wide_options.collapse;
         let optimal = collapse == WideCollapse::Optimal;
@@ -457,6 +542,7 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
                 .treelet_settings()
                 .map(|_| schedule.climb_dp().name()),
             round_overlap: schedule.overlap,
+            schedule_tuning: report.tuned.as_ref().map(TuningRecord::from),
             sort_tile_items: gpu.sort_tile_items,
             climb_width: gpu.climb_width(),
             adapter: gpu.adapter_description(),
@@ -516,20 +602,8 @@ fn run_label(
     wide: WideOptions,
 ) -> String {
     let mut label = builder.label();
-    if let Some(levels) = schedule.level_dispatches {
-        label += &format!(" d={levels}");
-    }
-    if let Some(below) = schedule.team_below {
-        label += &format!(" t={below}");
-    }
-    if let Some(dp) = schedule.dp {
-        label += &format!(" dp={}", dp.name());
-    }
-    if let Some(dp) = schedule.climb_dp {
-        label += &format!(" climb-dp={}", dp.name());
-    }
-    if let Some(reach) = schedule.overlap {
-        label += &format!(" overlap={reach}");
+    if schedule != RoundSchedule::default() {
+        label += &format!(" {}", schedule.label());
     }
     match (layout, wide.level_dispatches) {
         (Layout::Binary, _) => format!("{label} binary"),

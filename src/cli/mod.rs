@@ -242,6 +242,25 @@ fn builder_names(builders: &[Builder]) -> String {
 
 /// Fails when one of the treelet `options` (flag, given) is given but no builder in `builders`
 /// has treelets: the option would be silently ignored.
+/// `--tune-schedule` of `bench` and `view`: tune a treelet builder's schedule (auto: on GPUs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum TuneSchedule {
+    Auto,
+    On,
+    Off,
+}
+
+impl TuneSchedule {
+    /// On or off as asked; None for auto.
+    fn forced(self) -> Option<bool> {
+        match self {
+            TuneSchedule::Auto => None,
+            TuneSchedule::On => Some(true),
+            TuneSchedule::Off => Some(false),
+        }
+    }
+}
+
 fn refuse_treelet_options(builders: &[Builder], options: &[(&str, bool)]) -> Result<()> {
     let has_treelets = builders.iter().any(|b| b.treelet_settings().is_some());
     match options.iter().find(|(_, given)| *given) {

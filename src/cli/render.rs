@@ -69,6 +69,7 @@ pub fn run(gpu: &GpuContext, args: &RenderArgs) -> Result<()> {
         layout,
         WideOptions::collapse(args.trace.single_wide_collapse()?),
         RoundSchedule::default(),
+        None,
     )?;
     let nodes = match &tree.wide {
         Some(wide) => format!("{} wide nodes", wide.counts(gpu)?.0),

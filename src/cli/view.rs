@@ -10,7 +10,7 @@ use treelet::bvh::UpdateMode;
 use treelet::gpu::GpuOptions;
 use treelet::Result;
 
-use super::parse_update_mode;
+use super::{parse_update_mode, TuneSchedule};
 
 #[derive(Args, Debug)]
 pub struct ViewArgs {
@@ -32,6 +32,11 @@ pub struct ViewArgs {
     /// Write a PNG of the whole window (image and panel) after --exit-after-frames frames
     #[arg(long, requires = "exit_after_frames")]
     screenshot: Option<PathBuf>,
+    /// Tune a treelet builder's schedule on this device and scene (every schedule builds the same
+    /// tree; the panel's Tune button does it at any time): auto (on GPUs, after a few seconds of
+    /// frames, once per builder), on (at once, also on CPU devices, where it takes minutes) or off
+    #[arg(long, value_enum, default_value_t = TuneSchedule::Auto)]
+    tune_schedule: TuneSchedule,
     /// Exit after rendering this many frames
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
     exit_after_frames: Option<u64>,
@@ -50,5 +55,6 @@ pub fn run(adapter: Option<String>, args: ViewArgs) -> Result<()> {
         window_size: (args.width, args.height),
         screenshot: args.screenshot,
         exit_after_frames: args.exit_after_frames,
+        tune_schedule: args.tune_schedule.forced(),
     })
 }

@@ -48,6 +48,7 @@ pub fn measure(
         Layout::Binary,
         WideOptions::default(),
         RoundSchedule::default(),
+        None,
     )?;
     let bvh = tree.download(ctx)?;
     let validation = if builder.duplicates_references() {

@@ -29,7 +29,7 @@ pub use nodes_level::NODES_LEVEL;
 pub use nodes_mark::NODES_MARK;
 pub use treelets_climb::TREELETS_CLIMB;
 pub use treelets_optimize::TREELETS_OPTIMIZE;
-pub use waves::{WAVES_CLIMB, WAVES_FIND, WAVES_OPTIMIZE};
+pub use waves::{OVERLAP_REACH, WAVES_CLIMB, WAVES_FIND, WAVES_OPTIMIZE};
 
 pub use dp_unrolled::TreeletDp;
 pub use rounds::RoundSchedule;
@@ -296,6 +296,10 @@ impl TrbvhBuilder {
     /// How the rounds spread their work over the device (the tree does not depend on it).
     pub fn set_schedule(&mut self, schedule: RoundSchedule) {
         self.rounds.schedule = schedule;
+    }
+
+    pub fn schedule(&self) -> RoundSchedule {
+        self.rounds.schedule
     }
 
     /// Timestamped passes one build records (at most: each round two).

@@ -226,6 +226,37 @@ impl RoundSchedule {
     pub fn climb_dp(&self) -> TreeletDp {
         self.climb_dp.unwrap_or_else(|| self.dp())
     }
+
+    /// The options that are set, as `treelet bench` labels its runs ("d=14 t=16 dp=loop
+    /// climb-dp=loop overlap=6"; "default" when none is).
+    pub fn label(&self) -> String {
+        let mut parts = Vec::new();
+        if let Some(levels) = self.level_dispatches {
+            parts.push(format!("d={levels}"));
+        }
+        if let Some(below) = self.team_below {
+            parts.push(format!("t={below}"));
+        }
+        if let Some(dp) = self.dp {
+            parts.push(format!("dp={}", dp.name()));
+        }
+        if let Some(dp) = self.climb_dp {
+            parts.push(format!("climb-dp={}", dp.name()));
+        }
+        if let Some(reach) = self.overlap {
+            parts.push(format!("overlap={reach}"));
+        }
+        if parts.is_empty() {
+            return "default".into();
+        }
+        parts.join(" ")
+    }
+
+    /// The level dispatches the default schedule gives a round of `n` leaves and smallest root
+    /// `gamma` on a device of type `device` (see `level_dispatches`).
+    pub fn default_level_dispatches(n: u32, gamma: u32, device: wgpu::DeviceType) -> u32 {
+        level_dispatches(n, gamma, device).min(MAX_LEVEL_DISPATCHES)
+    }
 }
 
 /// The level size below which teams optimize the treelets by default: 0, never. On lavapipe

@@ -25,6 +25,12 @@ kernel!(pub WAVES_OPTIMIZE: RoundParams = "waves_optimize"::"main", [32, 1, 1],
 kernel!(pub WAVES_CLIMB: RoundParams = "waves_climb"::"main", [128, 1, 1],
     [ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite]);
 
+/// The reach that keeps the rounds' trees (`RoundSchedule::overlap`): a treelet spans six
+/// levels, so a round starts on a root once it and its ancestors six levels up are done in the
+/// round before; on every scene measured the trees are those of the rounds one after another
+/// (README, "Rounds can overlap"), and the tests compare them.
+pub const OVERLAP_REACH: u32 = 6;
+
 /// Words of the wave state (`treelet_waves.wgsl`): counts, tickets, the stop flag.
 const WAVE_STATE_WORDS: u64 = 6;
 /// Where the wave state holds the count of odd waves' candidates (`CANDIDATE_COUNT + 1` in
