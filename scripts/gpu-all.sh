@@ -67,13 +67,15 @@ fi
 
 small="--width 64 --height 64 --spp 1 --repeats 21"
 scaling() {
+  # The treelet builders tune their schedule first (on a GPU by default): the table shows the
+  # schedule each kept; the first rows of the step "schedules" time the default one.
   for s in field:224 field:707 field:1000 field:2000 conference crytek_sponza sibenik lost_empire; do
     timeout 60 $TREELET bench --scene $s --builder lbvh,trbvh,trbvh-split $small >> $res/scaling.jsonl
   done
   # Fewer rounds of larger treelets: (8, 2) is within about 1 % of (7, 3)'s SAH on the shared
   # scenes (lavapipe), with a third fewer levels in the chain but a DP three times as long.
   for s in conference field:707; do
-    timeout 60 $TREELET bench --scene $s --builder trbvh --treelet-size 7,8 --rounds 2,3 $small >> $res/scaling.jsonl
+    timeout 60 $TREELET bench --scene $s --builder trbvh --treelet-size 7,8 --rounds 2,3 --tune-schedule off $small >> $res/scaling.jsonl
   done
   if [ -n "$base" ]; then
     for s in field:707 conference sibenik; do
@@ -87,7 +89,7 @@ export -f scaling
 wide_levels() {
   for s in conference crytek_sponza lost_empire field:707; do
     timeout 40 $TREELET bench --scene $s --builder trbvh --layout wide \
-      --wide-level-dispatches 6,8,10,12,14,16,20 $small >> $res/widelevels.jsonl
+      --wide-level-dispatches 6,8,10,12,14,16,20 --tune-schedule off $small >> $res/widelevels.jsonl
   done
 }
 export -f wide_levels
@@ -148,6 +150,15 @@ for name in ("scaling.jsonl", "baseline.jsonl"):
         print(f"  {os.path.basename(r['scene'])[:14]:14} {r['builder']:11} {preset:6} {r['triangles']:>9}"
               f" {b.get('min', 0):7.2f} {r['build_ms']:7.2f} {b.get('max', 0):7.2f}"
               f" {r.get('mtris_per_s') or 0:7.1f}  {st}  {r.get('sah') or 0:.4f}")
+        tuning = r.get("schedule_tuning")
+        if tuning:
+            kept = [t for t in tuning["trials"] if t["adopted"]]
+            first = tuning["trials"][0] if tuning["trials"] else {}
+            print(f"      tuned in {tuning['builds']} builds, {tuning['wall_ms']:.0f} ms: "
+                  f"{kept[-1]['schedule'] if kept else 'default'}"
+                  f" ({first.get('kept_ms') or 0:.3f} -> {(kept[-1]['candidate_ms'] if kept else first.get('kept_ms')) or 0:.3f} ms)"
+                  + (" REFUSED: " + ", ".join(t["schedule"] for t in tuning["trials"] if t["other_tree"])
+                     if any(t["other_tree"] for t in tuning["trials"]) else ""))
 PY
 for f in probe variants layouts profile kernels schedules; do
   echo "--- $f (tail)"

@@ -15,13 +15,13 @@ set -u
 . scripts/gpu-env.sh
 : > "$out/layouts.jsonl"
 for s in ${SCENES:-conference crytek_sponza sibenik lost_empire armadillo dabrovic_sponza field:707}; do
-  timeout 150 "$bin" bench --scene "$s" --builder lbvh,trbvh,trbvh-split --layout binary,wide \
+  timeout 150 "$bin" bench --scene "$s" --builder lbvh,trbvh,trbvh-split --layout binary,wide --tune-schedule off \
     --width "${W:-1920}" --height "${H:-1080}" --spp "${SPP:-4}" --repeats "${REPEATS:-21}" >> "$out/layouts.jsonl" 2>> "$out/layouts.log" \
     || echo "$s: exit $? (see layouts.log)"
 done
 # The SAH-optimal collapse against the greedy one, both converted on the GPU, trbvh.
 for s in ${OPTIMAL_SCENES:-conference crytek_sponza lost_empire}; do
-  timeout 100 "$bin" bench --scene "$s" --builder trbvh --layout wide --wide-collapse optimal \
+  timeout 100 "$bin" bench --scene "$s" --builder trbvh --layout wide --wide-collapse optimal --tune-schedule off \
     --width "${W:-1920}" --height "${H:-1080}" --spp "${SPP:-4}" --repeats "${REPEATS:-21}" >> "$out/layouts.jsonl" 2>> "$out/layouts.log" \
     || echo "$s optimal collapse: exit $? (see layouts.log)"
 done

@@ -21,7 +21,7 @@ for s in ${SCENES:-conference sibenik field:707 field:1000}; do
     opts=""
     [ "$tile" = default ] || opts="--sort-tile-items $tile"
     # shellcheck disable=SC2086
-    timeout 250 "$bin" bench --scene "$s" --builder "${BUILDERS:-lbvh,trbvh,trbvh-split}" $opts ${EXTRA:-} \
+    timeout 250 "$bin" bench --scene "$s" --builder "${BUILDERS:-lbvh,trbvh,trbvh-split}" $opts --tune-schedule off ${EXTRA:-} \
       --profile-dispatches --width 64 --height 64 --spp 1 --repeats "${REPEATS:-11}" \
       >> "$out/${NAME:-profile}.jsonl" 2>> "$out/${NAME:-profile}.log" \
       || echo "$s $tile: exit $? (see ${NAME:-profile}.log)"

@@ -17,13 +17,14 @@ set -u
 . scripts/gpu-env.sh
 : > "$out/schedules.jsonl"
 for s in ${SCENES:-conference sibenik field:707}; do
-  # The default schedule first (no options), then the DP's forms, the overlapped rounds, teams,
-  # then the sweep.
+  # The default schedule first, then the one a tuning keeps (`--tune-schedule on`: its trials in
+  # the JSON), the DP's forms, the overlapped rounds, teams, then the sweep (a schedule option
+  # turns the tuning off).
   sweep=""
   if [ -n "${LEVELS:-}" ]; then
     sweep="--level-dispatches $LEVELS --team-below ${TEAMS:-0,64,512}"
   fi
-  for opts in "" "--treelet-dp ${DPS:-unrolled,loop} --climb-dp ${DPS:-unrolled,loop}" \
+  for opts in "--tune-schedule off" "--tune-schedule on" "--treelet-dp ${DPS:-unrolled,loop} --climb-dp ${DPS:-unrolled,loop}" \
       "--round-overlap ${OVERLAPS:-6}" \
       "--round-overlap ${OVERLAPS:-6} --level-dispatches ${OVERLAP_LEVELS:-8,11}" \
       "--round-overlap ${OVERLAPS:-6} --treelet-dp loop" \
@@ -39,7 +40,7 @@ done
 : > "$out/climbs.jsonl"
 for s in ${SCENES:-conference sibenik field:707}; do
   for width in 64 ${CLIMBS:-32 128 256}; do
-    timeout 100 "$bin" bench --scene "$s" --builder lbvh,trbvh --climb-width "$width" --width 64 \
+    timeout 100 "$bin" bench --scene "$s" --builder lbvh,trbvh --climb-width "$width" --tune-schedule off --width 64 \
       --height 64 --spp 1 --repeats "${REPEATS:-11}" >> "$out/climbs.jsonl" \
       2>> "$out/schedules.log" || echo "$s climb width $width: exit $? (see schedules.log)"
   done
@@ -67,5 +68,6 @@ for scene in dict.fromkeys(r["scene"] for r in rows):
               f" {overlap:>7}"
               f" {r['build_ms']:9.3f}"
               f" {st.get('treelets') or 0:12.3f} {st.get('treelets climb') or 0:9.3f}"
-              f" {r['dispatches']:11} {r['sah']:.4f}")
+              f" {r['dispatches']:11} {r['sah']:.4f}"
+              + ("  (tuned)" if r.get("schedule_tuning") else ""))
 PY

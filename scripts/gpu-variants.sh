@@ -64,7 +64,7 @@ run)
           tag=main
           [ "$exe" = "$bin" ] || tag=$name
           # shellcheck disable=SC2086
-          timeout 60 "$exe" bench --scene "$s" $opts 2>> "$out/variants.log" \
+          timeout 60 "$exe" bench --scene "$s" $opts --tune-schedule off 2>> "$out/variants.log" \
             | sed "s/^{/{\"variant\":\"$name\",\"binary\":\"$tag\",\"turn\":$turn,/" >> "$out/variants.jsonl" \
             || echo "$name $s $tag: exit $? (see variants.log)"
         done
