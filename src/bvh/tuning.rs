@@ -245,8 +245,9 @@ pub fn tune_schedule(
                 builds += 1;
                 if !trials.builds_reference_tree(candidate)? {
                     log::warn!(
-                        "schedule [{}] built another tree than [{}]: a device or kernel bug \
-                         (every schedule must build the same tree); not used",
+                        "schedule [{}] built another tree than [{}]: a kernel or device bug, or \
+                         for overlapped rounds a tree where the reach does not keep the rounds' \
+                         trees (README, \"Rounds can overlap\"); not used",
                         candidate.label(),
                         start.label()
                     );
