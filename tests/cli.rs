@@ -266,16 +266,17 @@ fn bench_round_overlap_reports_each_reach() {
     assert_eq!(records[1]["nodes"], records[0]["nodes"]);
 }
 
-/// `bench --tune-schedule on` tunes trbvh's schedule from the one given (`--round-overlap none`
-/// stays as given): it lists every trial with both medians, no schedule built another tree, the
-/// schedule reported is the last one kept (or the one given), and the tree is the untuned one's.
-/// Without the option a CPU device does not tune (auto).
+/// `bench --tune-schedule on` tunes lbvh's and trbvh's build schedules from the one given
+/// (`--round-overlap none` stays as given): every trial is listed with both medians, no schedule
+/// built another tree, lbvh tries sort tiles alone, the schedule reported is the last one kept
+/// (or the one given), and the trees are the untuned ones. Without the option a CPU device does
+/// not tune (auto).
 #[test]
 fn bench_tunes_the_schedule_on_request() {
-    let untuned = quick_bench("trbvh", &[]);
-    assert!(untuned[0]["schedule_tuning"].is_null());
+    let untuned = quick_bench("lbvh,trbvh", &[]);
+    assert!(untuned.iter().all(|r| r["schedule_tuning"].is_null()));
     let tuned = quick_bench(
-        "trbvh",
+        "lbvh,trbvh",
         &[
             "--tune-schedule",
             "on",
@@ -285,37 +286,44 @@ fn bench_tunes_the_schedule_on_request() {
             "none",
         ],
     );
-    let record = &tuned[0];
-    let trials = record["schedule_tuning"]["trials"].as_array().unwrap();
-    // The DP forms (2), the team thresholds (3) and the level dispatches (2) at least.
-    assert!(trials.len() >= 7, "{trials:?}");
-    for trial in trials {
-        assert_eq!(trial["other_tree"], false, "{trial}");
-        assert!(trial["kept_ms"].as_f64().unwrap() > 0.0);
-        assert!(trial["candidate_ms"].as_f64().unwrap() > 0.0);
-        assert!(!trial["schedule"].as_str().unwrap().contains("overlap"));
+    for (record, untuned) in tuned.iter().zip(&untuned) {
+        let trials = record["schedule_tuning"]["trials"].as_array().unwrap();
+        let treelets = record["builder"] == "trbvh";
+        // trbvh: the DP forms (2), the team thresholds (3), the level dispatches (2) and the
+        // sort tiles (2, the CPU device's default being 32) at least; lbvh: the sort tiles.
+        assert!(trials.len() >= if treelets { 9 } else { 2 }, "{trials:?}");
+        for trial in trials {
+            assert_eq!(trial["other_tree"], false, "{trial}");
+            assert!(trial["kept_ms"].as_f64().unwrap() > 0.0);
+            assert!(trial["candidate_ms"].as_f64().unwrap() > 0.0);
+            let schedule = trial["schedule"].as_str().unwrap();
+            assert!(!schedule.contains("overlap"));
+            assert!(treelets || schedule.starts_with("tile="), "{schedule}");
+        }
+        let kept = trials
+            .iter()
+            .rev()
+            .find(|t| t["adopted"] == true)
+            .map_or("default", |t| t["schedule"].as_str().unwrap());
+        let parts: Vec<&str> = kept.split(' ').collect();
+        let value = |key: &str| parts.iter().find_map(|p| p.strip_prefix(key));
+        let tile = value("tile=").map(|t| t.parse::<u64>().unwrap());
+        assert_eq!(record["sort_tile_items"].as_u64(), tile, "{kept} {record}");
+        if treelets {
+            let team_below = value("t=").map_or(0, |t| t.parse().unwrap());
+            assert_eq!(record["team_below"], team_below, "{kept} {record}");
+            let dp = if parts.contains(&"dp=loop") {
+                "loop"
+            } else {
+                "unrolled"
+            };
+            assert_eq!(record["treelet_dp"], dp, "{kept} {record}");
+            assert!(record["round_overlap"].is_null());
+        }
+        assert_eq!(record["valid"], true);
+        assert_eq!(record["sah"], untuned["sah"]);
+        assert_eq!(record["nodes"], untuned["nodes"]);
     }
-    let kept = trials
-        .iter()
-        .rev()
-        .find(|t| t["adopted"] == true)
-        .map_or("default", |t| t["schedule"].as_str().unwrap());
-    let parts: Vec<&str> = kept.split(' ').collect();
-    let team_below = parts
-        .iter()
-        .find_map(|p| p.strip_prefix("t="))
-        .map_or(0, |t| t.parse().unwrap());
-    assert_eq!(record["team_below"], team_below, "{kept} {record}");
-    let dp = if parts.contains(&"dp=loop") {
-        "loop"
-    } else {
-        "unrolled"
-    };
-    assert_eq!(record["treelet_dp"], dp, "{kept} {record}");
-    assert!(record["round_overlap"].is_null());
-    assert_eq!(record["valid"], true);
-    assert_eq!(record["sah"], untuned[0]["sah"]);
-    assert_eq!(record["nodes"], untuned[0]["nodes"]);
 }
 
 /// `bench --wide-level-dispatches` converts the same tree with every split of the wide levels
@@ -627,8 +635,8 @@ fn options_of_other_builders_are_refused() {
             "'far' is neither a number of levels nor none",
         ),
         (
-            &["bench", "--builder", "lbvh,sweep", "--tune-schedule", "on"],
-            "--tune-schedule on does not apply to builder lbvh, sweep",
+            &["bench", "--builder", "sweep,sbvh", "--tune-schedule", "on"],
+            "--tune-schedule on does not apply to builder sweep, sbvh: only GPU builders",
         ),
         (
             &["bench", "--builder", "trbvh", "--tune-pairs", "0"],

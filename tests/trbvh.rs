@@ -15,9 +15,10 @@ use treelet::bvh::treelet::{
     RoundSchedule, TrbvhBuilder, TreeletDp, TreeletLeaf, TreeletSettings, WorkingTree,
     MAX_LEVEL_DISPATCHES,
 };
-use treelet::bvh::wide::{Layout, WideOptions};
+use treelet::bvh::wide::{validate_wide_with_references, Layout, WideOptions};
 use treelet::bvh::{
-    sah_cost, validate, validate_with_references, Builder, Bvh, SahParams, TuningOptions,
+    sah_cost, validate, validate_with_references, BuildSchedule, Builder, Bvh, SahParams,
+    TuningOptions,
 };
 use treelet::device::{Geometry, Tree};
 use treelet::gpu::{GpuContext, Timing};
@@ -713,9 +714,9 @@ fn repeated_builds_are_identical_and_valid() {
     }
 }
 
-/// A tuning of trbvh-split's schedule (every dimension free, one pair per comparison): every
-/// trial built the default schedule's tree, every dimension was tried, and the tree built with
-/// the schedule kept is the untuned one's.
+/// A tuning of trbvh-split's build schedule in the wide layout (every dimension free, one pair
+/// per comparison): every trial built the default schedule's tree, every dimension was tried,
+/// and the tree built with the schedule kept is the untuned one's.
 #[test]
 fn a_tuned_schedule_builds_the_untuned_tree() {
     let sah = SahParams::default();
@@ -731,7 +732,7 @@ fn a_tuned_schedule_builds_the_untuned_tree() {
                 &scene,
                 &sah,
                 &Timing::quick(1),
-                Layout::Binary,
+                Layout::Wide,
                 WideOptions::default(),
                 RoundSchedule::default(),
                 tuning,
@@ -748,12 +749,14 @@ fn a_tuned_schedule_builds_the_untuned_tree() {
     let (_, tuned_tree, report) = build(Some(&options));
     let tuned = report.tuned.expect("a tuning");
     assert!(tuned.trials.iter().all(|t| !t.other_tree), "{tuned:?}");
-    let tried = |f: &dyn Fn(&RoundSchedule) -> bool| tuned.trials.iter().any(|t| f(&t.candidate));
-    assert!(tried(&|s| s.overlap.is_some()));
-    assert!(tried(&|s| s.dp() == TreeletDp::Loop));
-    assert!(tried(&|s| s.climb_dp() == TreeletDp::Loop));
-    assert!(tried(&|s| s.level_dispatches.is_some()));
-    assert!(tried(&|s| s.team_below() != 0) || tuned.trials[0].adopted);
+    let tried = |f: &dyn Fn(&BuildSchedule) -> bool| tuned.trials.iter().any(|t| f(&t.candidate));
+    assert!(tried(&|s| s.rounds.overlap.is_some()));
+    assert!(tried(&|s| s.rounds.dp() == TreeletDp::Loop));
+    assert!(tried(&|s| s.rounds.climb_dp() == TreeletDp::Loop));
+    assert!(tried(&|s| s.rounds.level_dispatches.is_some()));
+    assert!(tried(&|s| s.rounds.team_below() != 0) || tuned.trials[0].adopted);
+    assert!(tried(&|s| s.sort_tile_items.is_some()));
+    assert!(tried(&|s| s.wide_level_dispatches.is_some()));
     assert!(tuned.builds as usize >= 3 * tuned.trials.len());
     let (want, got) = (
         untuned.download(gpu()).unwrap(),
@@ -765,6 +768,13 @@ fn a_tuned_schedule_builds_the_untuned_tree() {
         tuned.schedule.label()
     );
     validate_with_references(&got, &scene.triangles).unwrap();
+    let wide = tuned_tree
+        .wide
+        .as_ref()
+        .expect("the wide layout")
+        .download(gpu())
+        .unwrap();
+    validate_wide_with_references(&wide, &scene.triangles).unwrap();
 }
 
 #[test]

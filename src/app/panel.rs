@@ -15,9 +15,8 @@ use super::settings::ViewSettings;
 use super::stats::BuildTiming;
 use super::stats::FrameStats;
 use crate::anim::{AnimateStage, ANIMATIONS};
-use crate::bvh::treelet::RoundSchedule;
 use crate::bvh::wide::{Layout, WideCollapse, WideNode, WIDTH};
-use crate::bvh::{Builder, BvhNode, TunedSchedule, UpdateMode};
+use crate::bvh::{BuildSchedule, Builder, BvhNode, TunedSchedule, UpdateMode};
 use crate::scene::SCENES;
 
 /// Width of the panel in points.
@@ -50,13 +49,13 @@ pub struct PanelInfo<'a> {
     pub screenshot: Option<&'a str>,
     /// The animation of an animated scene.
     pub animation: Option<AnimationInfo<'a>>,
-    /// A treelet builder's schedule (None for other builders and refits).
+    /// A GPU builder's build schedule (None for CPU builders and refits).
     pub schedule: Option<ScheduleInfo<'a>>,
 }
 
-/// The treelet rounds' schedule in use, and the last tuning with the scene it ran on.
+/// The build schedule in use, and the last tuning with the scene it ran on.
 pub struct ScheduleInfo<'a> {
-    pub current: RoundSchedule,
+    pub current: BuildSchedule,
     pub tuned: Option<(&'a TunedSchedule, &'a str)>,
 }
 
@@ -378,7 +377,7 @@ fn bvh(
     sah(ui, info);
 }
 
-/// The treelet rounds' schedule, its last tuning and the button that tunes it.
+/// The build schedule, its last tuning and the button that tunes it.
 fn schedule(ui: &mut egui::Ui, info: &ScheduleInfo, actions: &mut PanelActions) {
     ui.label(format!("schedule: {}", info.current.label()));
     if let Some((tuned, scene)) = info.tuned {
@@ -408,11 +407,12 @@ fn schedule(ui: &mut egui::Ui, info: &ScheduleInfo, actions: &mut PanelActions) 
         }
     }
     let tune = ui.button("Tune schedule").on_hover_text(
-        "Time the treelet rounds' schedules on this device and scene and keep the fastest \
-         (rounds overlapped or one after another, DP forms, teams, dispatched levels): every \
-         schedule builds the same tree, which the tuning checks. Waits for about a hundred \
+        "Time the build's schedules on this device and scene and keep the fastest (treelet \
+         rounds overlapped or one after another, DP forms, teams, dispatched levels; the sort's \
+         tile; the wide conversion's dispatched levels): every schedule builds the same tree, \
+         which the tuning checks. Waits for about a hundred \
          builds (on a GPU a second or less; on a CPU device up to minutes); on a GPU it runs \
-         once by itself a few seconds after a treelet builder starts",
+         once by itself a few seconds after a GPU builder starts",
     );
     if tune.clicked() {
         actions.tune_schedule = true;

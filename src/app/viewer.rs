@@ -43,10 +43,10 @@ use super::stats::{BuildTiming, FrameStats, TreeSah};
 use super::tradeoff_panel::{StudyScene, TradeoffPanel};
 use super::tree_snapshot::TreeSnapshot;
 use crate::anim::{is_animation, load_animation};
-use crate::bvh::treelet::RoundSchedule;
 use crate::bvh::wide::Layout;
 use crate::bvh::{
-    tune_schedule, Builder, DeviceTrials, TreeUpdater, TunedSchedule, TuningOptions, UpdateMode,
+    tune_schedule, BuildSchedule, Builder, DeviceTrials, TreeUpdater, TunedSchedule, TuningOptions,
+    UpdateMode,
 };
 use crate::device::{Geometry, Tree};
 use crate::gpu::{GpuContext, ParamSlab, Recorder};
@@ -196,8 +196,8 @@ impl Viewer {
             reference: self.reference.state(),
             error: self.error.as_deref(),
             screenshot: self.screenshot_message.as_deref(),
-            schedule: self.updater.tunable_schedule().map(|current| ScheduleInfo {
-                current,
+            schedule: self.updater.is_tunable().then(|| ScheduleInfo {
+                current: self.updater.build_schedule(),
                 tuned: self.tuned.as_ref().map(|(t, scene)| (t, scene.as_str())),
             }),
             animation: self.animated.as_ref().map(|a| AnimationInfo {
@@ -595,25 +595,18 @@ impl Viewer {
             None => gpu.then_some(AUTO_TUNE_FRAMES),
         };
         self.auto_tune_at = delay
-            .filter(|_| self.updater.tunable_schedule().is_some())
+            .filter(|_| self.updater.is_tunable())
             .map(|d| self.stats.frames + d);
     }
 
-    /// Tunes the treelet rounds' schedule on the current geometry (see the module header); a
-    /// failure shows in the panel and keeps the schedule.
+    /// Tunes the build schedule on the current geometry (see the module header); a failure
+    /// shows in the panel and keeps the schedule.
     fn tune_schedule(&mut self, ctx: &GpuContext) {
         self.auto_tune_at = None;
-        let (Some(start), Some(settings)) = (
-            self.updater.tunable_schedule(),
-            self.updater.mode().builder().treelet_settings(),
-        ) else {
+        let Some(space) = self.updater.tuning_space(ctx, self.geometry.triangle_count) else {
             return;
         };
-        let default_levels = RoundSchedule::default_level_dispatches(
-            self.geometry.triangle_count,
-            settings.treelet_size,
-            ctx.info.device_type,
-        );
+        let start = self.updater.build_schedule();
         let tuned = DeviceTrials::new(
             ctx,
             &mut self.updater,
@@ -623,12 +616,7 @@ impl Viewer {
             start,
         )
         .and_then(|mut trials| {
-            tune_schedule(
-                &mut trials,
-                start,
-                default_levels,
-                &TuningOptions::default(),
-            )
+            tune_schedule(&mut trials, start, &space, &TuningOptions::default())
         });
         match tuned {
             Ok(tuned) => {
@@ -638,16 +626,22 @@ impl Viewer {
                     tuned.builds,
                     tuned.wall_ms
                 );
-                self.updater.set_round_schedule(tuned.schedule);
+                self.use_schedule(tuned.schedule);
                 self.tuned = Some((tuned, self.scene.name.clone()));
             }
             Err(e) => {
-                self.updater.set_round_schedule(start);
                 self.error = Some(format!("schedule tuning failed: {e}"));
+                self.use_schedule(start);
             }
         }
         // The tuning's builds left the same tree; the next frame builds it as usual.
         self.tree_dirty = true;
+    }
+
+    fn use_schedule(&mut self, schedule: BuildSchedule) {
+        if let Err(e) = self.updater.set_build_schedule(schedule) {
+            self.error = Some(format!("cannot use schedule [{}]: {e}", schedule.label()));
+        }
     }
 
     fn request_reference(&mut self) {

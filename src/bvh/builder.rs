@@ -43,7 +43,7 @@ pub struct BuildReport {
     pub stages: Vec<StageTime>,
     pub builds_ms: Vec<f64>,
     pub warmup: Warmup,
-    /// Treelet builders built with a tuned schedule: the tuning (its schedule is the one timed).
+    /// GPU builders built with a tuned schedule: the tuning (its schedule is the one timed).
     pub tuned: Option<TunedSchedule>,
 }
 
@@ -141,8 +141,8 @@ impl Builder {
     /// median time; the wide layout's conversion is one of their stages ("wide"). CPU builders
     /// are timed once, and their upload is converted once on the GPU (timed as "wide").
     /// `wide` sets the wide conversion (its collapse and level dispatches); `schedule` spreads the
-    /// treelet rounds over the device (trbvh, trbvh-split); with `tuning`, treelet builders tune
-    /// the schedule from it after the warm-up (`tune_schedule`) and time the one they keep.
+    /// treelet rounds over the device (trbvh, trbvh-split); with `tuning`, GPU builders tune their
+    /// build schedule from these after the warm-up (`tune_schedule`) and time the one they keep.
     #[allow(clippy::too_many_arguments)]
     pub fn build(
         self,
@@ -192,24 +192,21 @@ impl Builder {
                         .map_err(|e| Error::Gpu(format!("device poll failed: {e}")))
                         .map(drop)
                 })?;
-                let tuned = match (tuning, self.treelet_settings()) {
-                    (Some(options), Some(settings)) => {
-                        let prims = triangles.len().try_into().unwrap_or(u32::MAX);
-                        let default_levels = RoundSchedule::default_level_dispatches(
-                            prims,
-                            settings.treelet_size,
-                            ctx.info.device_type,
-                        );
+                let prims = triangles.len().try_into().unwrap_or(u32::MAX);
+                let space = updater.tuning_space(ctx, prims);
+                let tuned = match (tuning, space) {
+                    (Some(options), Some(space)) => {
+                        let start = updater.build_schedule();
                         let mut trials = DeviceTrials::new(
                             ctx,
                             &mut updater,
                             &geometry,
                             triangles,
                             &mut tree,
-                            schedule,
+                            start,
                         )?;
-                        let tuned = tune_schedule(&mut trials, schedule, default_levels, options)?;
-                        updater.set_round_schedule(tuned.schedule);
+                        let tuned = tune_schedule(&mut trials, start, &space, options)?;
+                        updater.set_build_schedule(tuned.schedule)?;
                         Some(tuned)
                     }
                     _ => None,

@@ -1,23 +1,26 @@
-//! Build-schedule tuning. Every schedule of the treelet rounds (`RoundSchedule`: the rounds one
-//! after another or overlapped, the lone DP's form in the dispatched levels and in the climb, the
-//! team threshold, the levels given a dispatch) builds the same tree (tests/trbvh.rs), so a
-//! schedule sets only the build's time, and which one is fastest depends on the device and the
-//! tree. `tune_schedule` finds it where the build runs: a coordinate descent from a starting
-//! schedule over the dimensions the caller left free; each alternative is first built once
-//! (compiling its kernels) and refused unless its tree is the starting schedule's bit for bit (on
-//! a device where it is not, a schedule has a bug: the tuner logs it and never keeps it), then
-//! timed in alternation with the schedule kept so far (pairs of builds, so that a change of clocks
-//! hits both) and kept when its median build is shorter by a margin. `DeviceTrials` runs the
-//! trials on the GPU through a `TreeUpdater`. Not from the paper, whose schedule is one (§4): the
-//! README's "Schedule tuning" says what it varies and why.
+//! Build-schedule tuning. A build's schedule (`BuildSchedule`: the treelet rounds' —
+//! `RoundSchedule`: the rounds one after another or overlapped, the lone DP's form in the
+//! dispatched levels and in the climb, the team threshold, the levels given a dispatch — the radix
+//! sort's tile and the wide conversion's level dispatches) never changes the tree (tests), so it
+//! sets only the build's time, and which one is fastest depends on the device and the tree.
+//! `tune_schedule` finds it where the build runs: a coordinate descent from a starting schedule
+//! over the dimensions that apply (`TuningSpace`) and that the caller left free; each alternative
+//! is first built once (compiling its kernels) and refused unless its tree is the starting
+//! schedule's (on a device where it is not, a schedule has a bug: the tuner logs it and never
+//! keeps it), then timed in alternation with the schedule kept so far (pairs of builds, so that a
+//! change of clocks hits both) and kept when its median build is shorter by a margin.
+//! `DeviceTrials` runs the trials on the GPU through a `TreeUpdater`. Not from the paper, whose
+//! schedule is one (§4): the README's "Schedule tuning" says what it varies and why.
 
 use std::time::Instant;
 
 use super::treelet::{RoundSchedule, TreeletDp, MAX_LEVEL_DISPATCHES, OVERLAP_REACH};
+use super::wide::MAX_WIDE_LEVEL_DISPATCHES;
 use super::{Bvh, TreeUpdater};
 use crate::device::{Geometry, Tree};
 use crate::gpu::{GpuContext, GpuTimer, ParamSlab, Recorder};
 use crate::scene::Triangle;
+use crate::sort::SORT_TILE_ITEMS;
 use crate::{Error, Result};
 
 /// Team thresholds a tuning tries (treelets per level below which teams of 32 optimize them; 0:
@@ -25,6 +28,53 @@ use crate::{Error, Result};
 const TEAM_THRESHOLDS: [u32; 4] = [0, 4, 16, 256];
 /// How far from the device's default the level dispatches a tuning tries lie.
 const LEVEL_DISPATCH_STEP: u32 = 3;
+/// The same for the wide conversion's level dispatches (the default is about every level a deep
+/// wide tree has, plus a few: a level past the tree dispatches no workgroups).
+const WIDE_LEVEL_STEPS: [i32; 3] = [-6, -3, 3];
+
+/// How a build spreads over the device, in every way that leaves its tree as it is.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BuildSchedule {
+    /// The treelet rounds' (trbvh, trbvh-split).
+    pub rounds: RoundSchedule,
+    /// Keys per invocation of the radix sort's tiles (one of `SORT_TILE_ITEMS`); None: the
+    /// context's `sort_tile_items`, else chosen by key count and device (`sort::tile_items`).
+    pub sort_tile_items: Option<u32>,
+    /// Levels of the wide conversion given a dispatch (wide layout); None: by reference count and
+    /// device (`WideConverter::level_dispatches`).
+    pub wide_level_dispatches: Option<u32>,
+}
+
+impl BuildSchedule {
+    /// The options that are set, as `treelet bench` labels its runs ("overlap=6 tile=16 wd=14";
+    /// "default" when none is).
+    pub fn label(&self) -> String {
+        let mut parts = Vec::new();
+        if self.rounds != RoundSchedule::default() {
+            parts.push(self.rounds.label());
+        }
+        if let Some(items) = self.sort_tile_items {
+            parts.push(format!("tile={items}"));
+        }
+        if let Some(levels) = self.wide_level_dispatches {
+            parts.push(format!("wd={levels}"));
+        }
+        if parts.is_empty() {
+            return "default".into();
+        }
+        parts.join(" ")
+    }
+}
+
+/// The dimensions that apply to an updater's builds, with the device's defaults for the tree
+/// (`TreeUpdater::tuning_space`): the treelet rounds' level dispatches (treelet builders), the
+/// sort tile (every GPU builder), the wide conversion's level dispatches (wide layout).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TuningSpace {
+    pub round_levels: Option<u32>,
+    pub sort_tile_items: u32,
+    pub wide_levels: Option<u32>,
+}
 
 /// The schedule dimensions a tuning leaves as the starting schedule has them (the user fixed
 /// them).
@@ -35,6 +85,8 @@ pub struct SchedulePins {
     pub climb_dp: bool,
     pub team_below: bool,
     pub level_dispatches: bool,
+    pub sort_tile_items: bool,
+    pub wide_level_dispatches: bool,
 }
 
 /// How a tuning measures.
@@ -65,15 +117,15 @@ impl Default for TuningOptions {
 pub trait ScheduleTrials {
     /// Builds once with `schedule`, untimed (its kernels compile), and tells whether the tree is
     /// the one the starting schedule built, bit for bit.
-    fn builds_reference_tree(&mut self, schedule: RoundSchedule) -> Result<bool>;
+    fn builds_reference_tree(&mut self, schedule: BuildSchedule) -> Result<bool>;
     /// Builds once with `schedule`: the build's time, ms.
-    fn time_build(&mut self, schedule: RoundSchedule) -> Result<f64>;
+    fn time_build(&mut self, schedule: BuildSchedule) -> Result<f64>;
 }
 
 /// One alternative a tuning tried against the schedule kept at the time.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ScheduleTrial {
-    pub candidate: RoundSchedule,
+    pub candidate: BuildSchedule,
     /// Median builds, ms, of the kept schedule and of the candidate over the same pairs (None:
     /// the candidate built another tree and was not timed).
     pub kept_ms: Option<f64>,
@@ -87,14 +139,14 @@ pub struct ScheduleTrial {
 /// The outcome of a tuning: the schedule kept and every trial, in order.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TunedSchedule {
-    pub schedule: RoundSchedule,
+    pub schedule: BuildSchedule,
     pub trials: Vec<ScheduleTrial>,
     /// Builds the tuning ran (untimed ones included) and its wall-clock time.
     pub builds: u32,
     pub wall_ms: f64,
 }
 
-/// A dimension of the schedule (a field of `RoundSchedule`).
+/// A dimension of the schedule.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Dimension {
     Overlap,
@@ -102,15 +154,19 @@ enum Dimension {
     ClimbDp,
     TeamBelow,
     LevelDispatches,
+    SortTile,
+    WideLevels,
 }
 
 impl Dimension {
-    const ALL: [Dimension; 5] = [
+    const ALL: [Dimension; 7] = [
         Dimension::Overlap,
         Dimension::Dp,
         Dimension::ClimbDp,
         Dimension::TeamBelow,
         Dimension::LevelDispatches,
+        Dimension::SortTile,
+        Dimension::WideLevels,
     ];
 
     fn is_pinned(self, pins: &SchedulePins) -> bool {
@@ -120,56 +176,98 @@ impl Dimension {
             Dimension::ClimbDp => pins.climb_dp,
             Dimension::TeamBelow => pins.team_below,
             Dimension::LevelDispatches => pins.level_dispatches,
+            Dimension::SortTile => pins.sort_tile_items,
+            Dimension::WideLevels => pins.wide_level_dispatches,
         }
     }
 
-    /// The schedules that differ from `kept` in this dimension alone and run differently;
-    /// `default_levels` is the level dispatches the device would choose for the tree
-    /// (`RoundSchedule::default_level_dispatches`).
-    fn alternatives(self, kept: RoundSchedule, default_levels: u32) -> Vec<RoundSchedule> {
-        let values: Vec<RoundSchedule> = match self {
+    fn applies(self, space: &TuningSpace) -> bool {
+        match self {
+            Dimension::SortTile => true,
+            Dimension::WideLevels => space.wide_levels.is_some(),
+            _ => space.round_levels.is_some(),
+        }
+    }
+
+    /// The schedules that differ from `kept` in this dimension alone and run differently.
+    fn alternatives(self, kept: BuildSchedule, space: &TuningSpace) -> Vec<BuildSchedule> {
+        let rounds = |r: RoundSchedule| BuildSchedule { rounds: r, ..kept };
+        let k = kept.rounds;
+        let values: Vec<BuildSchedule> = match self {
             Dimension::Overlap => [None, Some(OVERLAP_REACH)]
-                .map(|overlap| RoundSchedule { overlap, ..kept })
+                .map(|overlap| rounds(RoundSchedule { overlap, ..k }))
                 .to_vec(),
             // The climb keeps its form (by default it follows the dispatched levels').
             Dimension::Dp => [TreeletDp::Unrolled, TreeletDp::Loop]
-                .map(|dp| RoundSchedule {
-                    dp: Some(dp),
-                    climb_dp: Some(kept.climb_dp()),
-                    ..kept
+                .map(|dp| {
+                    rounds(RoundSchedule {
+                        dp: Some(dp),
+                        climb_dp: Some(k.climb_dp()),
+                        ..k
+                    })
                 })
                 .to_vec(),
             Dimension::ClimbDp => [TreeletDp::Unrolled, TreeletDp::Loop]
-                .map(|dp| RoundSchedule {
-                    climb_dp: Some(dp),
-                    ..kept
+                .map(|dp| {
+                    rounds(RoundSchedule {
+                        climb_dp: Some(dp),
+                        ..k
+                    })
                 })
                 .to_vec(),
             // Teams do not apply to overlapped rounds.
-            Dimension::TeamBelow if kept.overlap.is_some() => Vec::new(),
+            Dimension::TeamBelow if k.overlap.is_some() => Vec::new(),
             Dimension::TeamBelow => TEAM_THRESHOLDS
-                .map(|below| RoundSchedule {
-                    team_below: Some(below),
-                    ..kept
+                .map(|below| {
+                    rounds(RoundSchedule {
+                        team_below: Some(below),
+                        ..k
+                    })
                 })
                 .to_vec(),
-            Dimension::LevelDispatches => [
-                None,
-                Some(default_levels.saturating_sub(LEVEL_DISPATCH_STEP)),
-                Some((default_levels + LEVEL_DISPATCH_STEP).min(MAX_LEVEL_DISPATCHES)),
-            ]
-            .map(|level_dispatches| RoundSchedule {
-                level_dispatches,
-                ..kept
-            })
-            .to_vec(),
+            Dimension::LevelDispatches => {
+                let default = space.round_levels.unwrap_or(0);
+                [
+                    None,
+                    Some(default.saturating_sub(LEVEL_DISPATCH_STEP)),
+                    Some((default + LEVEL_DISPATCH_STEP).min(MAX_LEVEL_DISPATCHES)),
+                ]
+                .map(|level_dispatches| {
+                    rounds(RoundSchedule {
+                        level_dispatches,
+                        ..k
+                    })
+                })
+                .to_vec()
+            }
+            Dimension::SortTile => std::iter::once(None)
+                .chain(SORT_TILE_ITEMS.map(Some))
+                .map(|sort_tile_items| BuildSchedule {
+                    sort_tile_items,
+                    ..kept
+                })
+                .collect(),
+            Dimension::WideLevels => {
+                let default = space.wide_levels.unwrap_or(0);
+                std::iter::once(None)
+                    .chain(WIDE_LEVEL_STEPS.map(|step| {
+                        Some(
+                            default
+                                .saturating_add_signed(step)
+                                .min(MAX_WIDE_LEVEL_DISPATCHES),
+                        )
+                    }))
+                    .map(|wide_level_dispatches| BuildSchedule {
+                        wide_level_dispatches,
+                        ..kept
+                    })
+                    .collect()
+            }
         };
-        let mut distinct: Vec<RoundSchedule> = Vec::new();
+        let mut distinct: Vec<BuildSchedule> = Vec::new();
         for v in values {
-            if !same_in_effect(v, kept, default_levels)
-                && !distinct
-                    .iter()
-                    .any(|d| same_in_effect(*d, v, default_levels))
+            if !same_in_effect(v, kept, space)
+                && !distinct.iter().any(|d| same_in_effect(*d, v, space))
             {
                 distinct.push(v);
             }
@@ -178,24 +276,34 @@ impl Dimension {
     }
 
     /// Whether `a` and `b` take the same value in this dimension.
-    fn same_value(self, a: RoundSchedule, b: RoundSchedule, default_levels: u32) -> bool {
+    fn same_value(self, a: BuildSchedule, b: BuildSchedule, space: &TuningSpace) -> bool {
+        let (ra, rb) = (a.rounds, b.rounds);
         match self {
-            Dimension::Overlap => a.overlap == b.overlap,
-            Dimension::Dp => a.dp() == b.dp(),
-            Dimension::ClimbDp => a.climb_dp() == b.climb_dp(),
-            Dimension::TeamBelow => a.team_below() == b.team_below(),
+            Dimension::Overlap => ra.overlap == rb.overlap,
+            Dimension::Dp => ra.dp() == rb.dp(),
+            Dimension::ClimbDp => ra.climb_dp() == rb.climb_dp(),
+            Dimension::TeamBelow => ra.team_below() == rb.team_below(),
             Dimension::LevelDispatches => {
-                a.level_dispatches.unwrap_or(default_levels)
-                    == b.level_dispatches.unwrap_or(default_levels)
+                let default = space.round_levels.unwrap_or(0);
+                ra.level_dispatches.unwrap_or(default) == rb.level_dispatches.unwrap_or(default)
+            }
+            Dimension::SortTile => {
+                a.sort_tile_items.unwrap_or(space.sort_tile_items)
+                    == b.sort_tile_items.unwrap_or(space.sort_tile_items)
+            }
+            Dimension::WideLevels => {
+                let default = space.wide_levels.unwrap_or(0);
+                a.wide_level_dispatches.unwrap_or(default)
+                    == b.wide_level_dispatches.unwrap_or(default)
             }
         }
     }
 }
 
 /// Whether two schedules run the same way.
-fn same_in_effect(a: RoundSchedule, b: RoundSchedule, default_levels: u32) -> bool {
+fn same_in_effect(a: BuildSchedule, b: BuildSchedule, space: &TuningSpace) -> bool {
     Dimension::ALL.iter().all(|d| {
-        d.same_value(a, b, default_levels) || (*d == Dimension::TeamBelow && a.overlap.is_some())
+        d.same_value(a, b, space) || (*d == Dimension::TeamBelow && a.rounds.overlap.is_some())
     })
 }
 
@@ -204,12 +312,11 @@ fn median(mut values: Vec<f64>) -> f64 {
     values[values.len() / 2]
 }
 
-/// Tunes the schedule from `start` (see the module header); `default_levels` is the level
-/// dispatches the device would choose for the tree.
+/// Tunes the schedule from `start` over the dimensions of `space` (see the module header).
 pub fn tune_schedule(
     trials: &mut impl ScheduleTrials,
-    start: RoundSchedule,
-    default_levels: u32,
+    start: BuildSchedule,
+    space: &TuningSpace,
     options: &TuningOptions,
 ) -> Result<TunedSchedule> {
     if options.pairs == 0 {
@@ -223,21 +330,20 @@ pub fn tune_schedule(
     let mut builds = 0;
     // Values that built another tree (never tried again), and the pairs of (kept, candidate)
     // schedules compared so far (not compared again).
-    let mut refused: Vec<(Dimension, RoundSchedule)> = Vec::new();
-    let mut compared: Vec<(RoundSchedule, RoundSchedule)> = Vec::new();
+    let mut refused: Vec<(Dimension, BuildSchedule)> = Vec::new();
+    let mut compared: Vec<(BuildSchedule, BuildSchedule)> = Vec::new();
     for _ in 0..options.max_descents {
         let mut changed = false;
-        for dimension in Dimension::ALL
+        let free = Dimension::ALL
             .into_iter()
-            .filter(|d| !d.is_pinned(&options.pins))
-        {
-            for candidate in dimension.alternatives(kept, default_levels) {
+            .filter(|d| d.applies(space) && !d.is_pinned(&options.pins));
+        for dimension in free {
+            for candidate in dimension.alternatives(kept, space) {
                 let was_refused = refused
                     .iter()
-                    .any(|(d, r)| *d == dimension && d.same_value(*r, candidate, default_levels));
+                    .any(|(d, r)| *d == dimension && d.same_value(*r, candidate, space));
                 let was_compared = compared.iter().any(|(k, c)| {
-                    same_in_effect(*k, kept, default_levels)
-                        && same_in_effect(*c, candidate, default_levels)
+                    same_in_effect(*k, kept, space) && same_in_effect(*c, candidate, space)
                 });
                 if was_refused || was_compared {
                     continue;
@@ -302,8 +408,33 @@ pub fn tune_schedule(
     })
 }
 
-/// Trials on the GPU: builds of `geometry` through `updater` (a trbvh or trbvh-split one) into
-/// `tree`, the starting schedule's tree read back once as the reference.
+/// What a trial's tree is compared by: the binary tree bit for bit, and of its wide layout (whose
+/// conversion numbers wide nodes by atomics, so that two conversions of one tree may order them
+/// differently) the counts of nodes and leaves and the depth.
+#[derive(Clone, Debug, Default, PartialEq)]
+struct TreeFingerprint {
+    binary: Bvh,
+    wide: Option<(usize, usize, usize)>,
+}
+
+impl TreeFingerprint {
+    fn of(ctx: &GpuContext, tree: &Tree) -> Result<Self> {
+        let wide = match &tree.wide {
+            Some(wide) => {
+                let wide = wide.download(ctx)?;
+                Some((wide.nodes.len(), wide.leaf_count(), wide.levels()))
+            }
+            None => None,
+        };
+        Ok(Self {
+            binary: tree.download(ctx)?,
+            wide,
+        })
+    }
+}
+
+/// Trials on the GPU: builds of `geometry` through `updater` (a GPU builder's, not a refit's)
+/// into `tree`, the starting schedule's tree read back once as the reference.
 pub struct DeviceTrials<'a> {
     ctx: &'a GpuContext,
     updater: &'a mut TreeUpdater,
@@ -311,7 +442,7 @@ pub struct DeviceTrials<'a> {
     triangles: &'a [Triangle],
     tree: &'a mut Tree,
     slab: ParamSlab,
-    reference: Bvh,
+    reference: TreeFingerprint,
 }
 
 impl<'a> DeviceTrials<'a> {
@@ -322,7 +453,7 @@ impl<'a> DeviceTrials<'a> {
         geometry: &'a Geometry,
         triangles: &'a [Triangle],
         tree: &'a mut Tree,
-        start: RoundSchedule,
+        start: BuildSchedule,
     ) -> Result<Self> {
         let mut trials = Self {
             ctx,
@@ -331,15 +462,15 @@ impl<'a> DeviceTrials<'a> {
             triangles,
             tree,
             slab: ParamSlab::new(ctx),
-            reference: Bvh::default(),
+            reference: TreeFingerprint::default(),
         };
         trials.build(start, None)?;
-        trials.reference = trials.tree.download(ctx)?;
+        trials.reference = TreeFingerprint::of(ctx, trials.tree)?;
         Ok(trials)
     }
 
-    fn build(&mut self, schedule: RoundSchedule, timer: Option<&mut GpuTimer>) -> Result<()> {
-        self.updater.set_round_schedule(schedule);
+    fn build(&mut self, schedule: BuildSchedule, timer: Option<&mut GpuTimer>) -> Result<()> {
+        self.updater.set_build_schedule(schedule)?;
         let mut rec = Recorder::new(self.ctx, &mut self.slab, timer);
         let result = self
             .updater
@@ -350,12 +481,12 @@ impl<'a> DeviceTrials<'a> {
 }
 
 impl ScheduleTrials for DeviceTrials<'_> {
-    fn builds_reference_tree(&mut self, schedule: RoundSchedule) -> Result<bool> {
+    fn builds_reference_tree(&mut self, schedule: BuildSchedule) -> Result<bool> {
         self.build(schedule, None)?;
-        Ok(self.tree.download(self.ctx)? == self.reference)
+        Ok(TreeFingerprint::of(self.ctx, self.tree)? == self.reference)
     }
 
-    fn time_build(&mut self, schedule: RoundSchedule) -> Result<f64> {
+    fn time_build(&mut self, schedule: BuildSchedule) -> Result<f64> {
         let mut timer = GpuTimer::new(self.ctx, self.updater.pass_count());
         let start = Instant::now();
         self.build(schedule, Some(&mut timer))?;
@@ -375,28 +506,38 @@ mod tests {
 
     /// Trials whose build time is a function of the schedule (`cost`), whose tree differs for
     /// the schedules `other_tree` accepts, and which count the builds of each schedule.
-    struct FakeTrials<C: Fn(RoundSchedule) -> f64, O: Fn(RoundSchedule) -> bool> {
+    struct FakeTrials<C: Fn(BuildSchedule) -> f64, O: Fn(BuildSchedule) -> bool> {
         cost: C,
         other_tree: O,
-        timed: Vec<RoundSchedule>,
+        timed: Vec<BuildSchedule>,
     }
 
-    impl<C: Fn(RoundSchedule) -> f64, O: Fn(RoundSchedule) -> bool> ScheduleTrials
+    impl<C: Fn(BuildSchedule) -> f64, O: Fn(BuildSchedule) -> bool> ScheduleTrials
         for FakeTrials<C, O>
     {
-        fn builds_reference_tree(&mut self, schedule: RoundSchedule) -> Result<bool> {
+        fn builds_reference_tree(&mut self, schedule: BuildSchedule) -> Result<bool> {
             Ok(!(self.other_tree)(schedule))
         }
 
-        fn time_build(&mut self, schedule: RoundSchedule) -> Result<f64> {
+        fn time_build(&mut self, schedule: BuildSchedule) -> Result<f64> {
             self.timed.push(schedule);
             Ok((self.cost)(schedule))
         }
     }
 
+    /// A treelet builder's wide-layout builds with the defaults 14 (level dispatches), 8 (sort
+    /// tile) and 20 (wide level dispatches).
+    const SPACE: TuningSpace = TuningSpace {
+        round_levels: Some(14),
+        sort_tile_items: 8,
+        wide_levels: Some(20),
+    };
+
     /// A build time with one best value per dimension: overlap 6, the loop DP in the climb,
-    /// teams below 16 (no teams apply with the overlap), 11 dispatched levels.
-    fn cost(s: RoundSchedule) -> f64 {
+    /// teams below 16 (no teams apply with the overlap), 11 dispatched levels, tiles of 16 keys
+    /// per invocation, 14 wide levels dispatched.
+    fn cost(b: BuildSchedule) -> f64 {
+        let s = b.rounds;
         let mut ms = 10.0;
         if s.overlap.is_none() {
             ms += 3.0 + if s.team_below() == 16 { -1.0 } else { 0.0 };
@@ -407,14 +548,21 @@ mod tests {
         if s.dp() == TreeletDp::Loop {
             ms += 0.1;
         }
-        ms + f64::from(s.level_dispatches.unwrap_or(14).abs_diff(11)) * 0.2
+        ms += f64::from(s.level_dispatches.unwrap_or(14).abs_diff(11)) * 0.2;
+        ms += if b.sort_tile_items == Some(16) {
+            0.0
+        } else {
+            0.4
+        };
+        ms + f64::from(b.wide_level_dispatches.unwrap_or(20).abs_diff(14)) * 0.05
     }
 
     fn tune(
-        other_tree: impl Fn(RoundSchedule) -> bool,
+        other_tree: impl Fn(BuildSchedule) -> bool,
         pins: SchedulePins,
-        start: RoundSchedule,
-    ) -> (TunedSchedule, Vec<RoundSchedule>) {
+        start: BuildSchedule,
+        space: &TuningSpace,
+    ) -> (TunedSchedule, Vec<BuildSchedule>) {
         let mut trials = FakeTrials {
             cost,
             other_tree,
@@ -425,17 +573,25 @@ mod tests {
             pins,
             ..TuningOptions::default()
         };
-        let tuned = tune_schedule(&mut trials, start, 14, &options).unwrap();
+        let tuned = tune_schedule(&mut trials, start, space, &options).unwrap();
         (tuned, trials.timed)
     }
 
     #[test]
     fn the_descent_keeps_the_fastest_schedule() {
-        let (tuned, timed) = tune(|_| false, SchedulePins::default(), RoundSchedule::default());
-        assert_eq!(tuned.schedule.overlap, Some(OVERLAP_REACH));
-        assert_eq!(tuned.schedule.climb_dp(), TreeletDp::Loop);
-        assert_eq!(tuned.schedule.dp(), TreeletDp::Unrolled);
-        assert_eq!(tuned.schedule.level_dispatches, Some(11));
+        let (tuned, timed) = tune(
+            |_| false,
+            SchedulePins::default(),
+            BuildSchedule::default(),
+            &SPACE,
+        );
+        let kept = tuned.schedule;
+        assert_eq!(kept.rounds.overlap, Some(OVERLAP_REACH));
+        assert_eq!(kept.rounds.climb_dp(), TreeletDp::Loop);
+        assert_eq!(kept.rounds.dp(), TreeletDp::Unrolled);
+        assert_eq!(kept.rounds.level_dispatches, Some(11));
+        assert_eq!(kept.sort_tile_items, Some(16));
+        assert_eq!(kept.wide_level_dispatches, Some(14));
         // Every kept schedule beat the one before it by the margin.
         for t in tuned.trials.iter().filter(|t| t.adopted) {
             assert!(t.candidate_ms.unwrap() < t.kept_ms.unwrap() * 0.98);
@@ -443,67 +599,103 @@ mod tests {
         // Teams were never timed once the rounds overlapped (they do not apply).
         assert!(timed
             .iter()
-            .all(|s| s.overlap.is_none() || s.team_below.is_none()));
+            .all(|s| s.rounds.overlap.is_none() || s.rounds.team_below.is_none()));
         assert_eq!(tuned.builds as usize, timed.len() + tuned.trials.len());
     }
 
     #[test]
+    fn only_the_dimensions_of_the_space_are_tried() {
+        // An LBVH in the binary layout: the sort tile alone.
+        let space = TuningSpace {
+            round_levels: None,
+            sort_tile_items: 8,
+            wide_levels: None,
+        };
+        let (tuned, timed) = tune(
+            |_| false,
+            SchedulePins::default(),
+            BuildSchedule::default(),
+            &space,
+        );
+        assert!(timed
+            .iter()
+            .all(|s| s.rounds == RoundSchedule::default() && s.wide_level_dispatches.is_none()));
+        // Tiles of 8 are the default: 16 (kept) and 32 are the alternatives, then the default
+        // against 16 in the second descent (the pair 16 against 32 is not timed again).
+        assert_eq!(tuned.trials.len(), 3);
+        assert_eq!(tuned.schedule.sort_tile_items, Some(16));
+    }
+
+    #[test]
     fn pinned_dimensions_keep_the_starting_values() {
-        let start = RoundSchedule {
-            overlap: None,
-            level_dispatches: Some(14),
-            ..RoundSchedule::default()
+        let start = BuildSchedule {
+            rounds: RoundSchedule {
+                overlap: None,
+                level_dispatches: Some(14),
+                ..RoundSchedule::default()
+            },
+            sort_tile_items: Some(32),
+            wide_level_dispatches: None,
         };
         let pins = SchedulePins {
             overlap: true,
             level_dispatches: true,
+            sort_tile_items: true,
             ..SchedulePins::default()
         };
-        let (tuned, timed) = tune(|_| false, pins, start);
-        assert!(timed
-            .iter()
-            .all(|s| s.overlap.is_none() && s.level_dispatches == Some(14)));
+        let (tuned, timed) = tune(|_| false, pins, start, &SPACE);
+        assert!(timed.iter().all(|s| s.rounds.overlap.is_none()
+            && s.rounds.level_dispatches == Some(14)
+            && s.sort_tile_items == Some(32)));
         // Without the overlap, teams below 16 pay.
-        assert_eq!(tuned.schedule.team_below(), 16);
-        assert_eq!(tuned.schedule.climb_dp(), TreeletDp::Loop);
+        assert_eq!(tuned.schedule.rounds.team_below(), 16);
+        assert_eq!(tuned.schedule.rounds.climb_dp(), TreeletDp::Loop);
+        assert_eq!(tuned.schedule.wide_level_dispatches, Some(14));
     }
 
     #[test]
     fn a_schedule_with_another_tree_is_never_timed_or_kept() {
         let (tuned, timed) = tune(
-            |s| s.overlap.is_some(),
+            |s| s.rounds.overlap.is_some(),
             SchedulePins::default(),
-            RoundSchedule::default(),
+            BuildSchedule::default(),
+            &SPACE,
         );
-        assert_eq!(tuned.schedule.overlap, None);
-        assert!(timed.iter().all(|s| s.overlap.is_none()));
+        assert_eq!(tuned.schedule.rounds.overlap, None);
+        assert!(timed.iter().all(|s| s.rounds.overlap.is_none()));
         let refused: Vec<_> = tuned.trials.iter().filter(|t| t.other_tree).collect();
         assert_eq!(refused.len(), 1, "refused once, not retried");
         assert!(refused[0].candidate_ms.is_none() && !refused[0].adopted);
         // The next best dimension still won.
-        assert_eq!(tuned.schedule.team_below(), 16);
+        assert_eq!(tuned.schedule.rounds.team_below(), 16);
     }
 
     #[test]
     fn gains_below_the_margin_are_not_kept() {
         let mut trials = FakeTrials {
-            cost: |s: RoundSchedule| if s.dp() == TreeletDp::Loop { 9.9 } else { 10.0 },
+            cost: |s: BuildSchedule| {
+                if s.rounds.dp() == TreeletDp::Loop {
+                    9.9
+                } else {
+                    10.0
+                }
+            },
             other_tree: |_| false,
             timed: Vec::new(),
         };
         let tuned = tune_schedule(
             &mut trials,
-            RoundSchedule::default(),
-            14,
+            BuildSchedule::default(),
+            &SPACE,
             &TuningOptions::default(),
         )
         .unwrap();
-        assert_eq!(tuned.schedule, RoundSchedule::default());
+        assert_eq!(tuned.schedule, BuildSchedule::default());
         assert!(tuned.trials.iter().all(|t| !t.adopted));
         assert!(tune_schedule(
             &mut trials,
-            RoundSchedule::default(),
-            14,
+            BuildSchedule::default(),
+            &SPACE,
             &TuningOptions {
                 pairs: 0,
                 ..TuningOptions::default()

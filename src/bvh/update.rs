@@ -10,11 +10,13 @@ use std::time::Instant;
 use super::lbvh::{LbvhBuilder, LBVH_PASSES};
 use super::nodes_refit::{derive_refit_links, NodesRefit};
 use super::treelet::{RoundSchedule, TrbvhBuilder, TreeletSettings};
+use super::tuning::{BuildSchedule, TuningSpace};
 use super::wide::{Layout, WideCollapse, WideConverter, WideOptions, MAX_WIDE_LEAF_SIZE};
 use super::{build_sbvh, build_sweep_sah, Builder, SahParams};
 use crate::device::{Geometry, Tree};
 use crate::gpu::{GpuContext, Recorder, StageTime};
 use crate::scene::Triangle;
+use crate::sort::tile_items;
 use crate::{Error, Result};
 
 /// The per-frame tree update of an animated scene.
@@ -114,6 +116,8 @@ pub struct TreeUpdater {
     converter: Option<WideConverter>,
     /// The wide conversion's collapse and level dispatches (kept while the layout is binary).
     wide: WideOptions,
+    /// The sort tile of the GPU builders (`BuildSchedule::sort_tile_items`).
+    sort_tile_items: Option<u32>,
 }
 
 impl TreeUpdater {
@@ -140,6 +144,7 @@ impl TreeUpdater {
             sah: *sah,
             converter: None,
             wide: WideOptions::default(),
+            sort_tile_items: None,
         })
     }
 
@@ -201,14 +206,68 @@ impl TreeUpdater {
         }
     }
 
-    /// The treelet rounds' schedule of a rebuild by trbvh or trbvh-split, the one a schedule
-    /// tuning (`tune_schedule`) may change; None for other modes (refits included: their
-    /// topology is built once).
-    pub fn tunable_schedule(&self) -> Option<RoundSchedule> {
-        match &self.producer {
-            Producer::Trbvh(b) if !self.mode.is_refit() => Some(b.schedule()),
-            _ => None,
+    /// How the next builds spread over the device (`BuildSchedule`; the tree does not depend
+    /// on it): the treelet rounds' schedule (trbvh, trbvh-split), the sort's tile (GPU
+    /// builders), the wide conversion's level dispatches (kept while the layout is binary).
+    pub fn set_build_schedule(&mut self, schedule: BuildSchedule) -> Result<()> {
+        match &mut self.producer {
+            Producer::Lbvh(b) => b.set_sort_tile_items(schedule.sort_tile_items)?,
+            Producer::Trbvh(b) => {
+                b.set_sort_tile_items(schedule.sort_tile_items)?;
+                b.set_schedule(schedule.rounds);
+            }
+            Producer::Cpu(_) => {}
         }
+        self.sort_tile_items = schedule.sort_tile_items;
+        self.set_wide_options(WideOptions {
+            level_dispatches: schedule.wide_level_dispatches,
+            ..self.wide
+        });
+        Ok(())
+    }
+
+    pub fn build_schedule(&self) -> BuildSchedule {
+        BuildSchedule {
+            rounds: match &self.producer {
+                Producer::Trbvh(b) => b.schedule(),
+                _ => RoundSchedule::default(),
+            },
+            sort_tile_items: self.sort_tile_items,
+            wide_level_dispatches: self.wide.level_dispatches,
+        }
+    }
+
+    /// Whether a schedule tuning applies: a GPU builder's rebuilds (not a CPU builder's, not a
+    /// refit's, whose topology is built once).
+    pub fn is_tunable(&self) -> bool {
+        !matches!(self.producer, Producer::Cpu(_)) && !self.mode.is_refit()
+    }
+
+    /// What a schedule tuning (`tune_schedule`) may vary in this updater's builds of `prims`
+    /// primitives, with the device's defaults (None where `is_tunable` is false).
+    pub fn tuning_space(&self, ctx: &GpuContext, prims: u32) -> Option<TuningSpace> {
+        if !self.is_tunable() {
+            return None;
+        }
+        let device = ctx.info.device_type;
+        let round_levels = match &self.producer {
+            Producer::Trbvh(b) => Some(RoundSchedule::default_level_dispatches(
+                prims,
+                b.settings.treelet_size,
+                device,
+            )),
+            _ => None,
+        };
+        Some(TuningSpace {
+            round_levels,
+            sort_tile_items: ctx
+                .sort_tile_items
+                .unwrap_or_else(|| tile_items(prims, device)),
+            wide_levels: self
+                .converter
+                .is_some()
+                .then(|| WideConverter::level_dispatches(prims, device)),
+        })
     }
 
     /// SAH parameters of the next builds (treelet builders' cost model and max leaf size; CPU

@@ -24,7 +24,7 @@ use treelet::sort::check_tile_items;
 use treelet::trace::{PathTracer, TraceStats};
 use treelet::Result;
 
-use super::{parse_builder, refuse_treelet_options, TraceArgs, TuneSchedule};
+use super::{builder_names, parse_builder, refuse_treelet_options, TraceArgs, TuneSchedule};
 
 #[derive(Args, Debug)]
 pub struct BenchArgs {
@@ -76,12 +76,13 @@ pub struct BenchArgs {
     /// default: one round after another); trbvh, trbvh-split; a comma-separated list to compare
     #[arg(long, value_delimiter = ',')]
     round_overlap: Vec<Reach>,
-    /// Tune the treelet rounds' schedule on this device and scene after the warm-up and before
-    /// the timed builds: the options above left unset are varied one at a time from their
-    /// defaults (every schedule builds the same tree, which the tuning checks) and the fastest
-    /// schedule is kept and timed; `schedule_tuning` in the JSON lists the trials. auto (the
-    /// default): on GPUs when no schedule option above is given, off on CPU devices (where a
-    /// tuning takes minutes); on; off. trbvh, trbvh-split
+    /// Tune the build schedule on this device and scene after the warm-up and before the timed
+    /// builds: the options above, --sort-tile-items and --wide-level-dispatches, where they are
+    /// not given, are varied one at a time from their defaults (every schedule builds the same
+    /// tree, which the tuning checks) and the fastest schedule is kept and timed;
+    /// `schedule_tuning` in the JSON lists the trials. auto (the default): on GPUs when none of
+    /// those options is given, off on CPU devices (where a tuning takes minutes); on; off. GPU
+    /// builders
     #[arg(long, value_enum, default_value_t = TuneSchedule::Auto)]
     tune_schedule: TuneSchedule,
     /// Builds of each schedule per comparison of a tuning (alternating with the schedule kept)
@@ -156,7 +157,6 @@ impl BenchArgs {
                 ("--treelet-dp", !self.treelet_dp.is_empty()),
                 ("--climb-dp", !self.climb_dp.is_empty()),
                 ("--round-overlap", !self.round_overlap.is_empty()),
-                ("--tune-schedule on", self.tune_schedule == TuneSchedule::On),
             ],
         )?;
         // No `--round-overlap` and `none` both mean one round after another.
@@ -185,15 +185,25 @@ impl BenchArgs {
         Ok(schedules)
     }
 
-    /// The tuning of the treelet builders' schedules (None: they are timed as given): the
-    /// dimensions set by an option stay as given.
-    fn tuning(&self, gpu: &GpuContext) -> Option<TuningOptions> {
+    /// The tuning of the GPU builders' build schedules (None: they are timed as given): the
+    /// dimensions set by an option stay as given. `--tune-schedule on` is refused when no
+    /// builder runs on the GPU.
+    fn tuning(&self, gpu: &GpuContext, builders: &[Builder]) -> Result<Option<TuningOptions>> {
+        if self.tune_schedule == TuneSchedule::On && !builders.iter().any(|b| b.is_gpu()) {
+            return Err(treelet::Error::InvalidArgument(format!(
+                "--tune-schedule on does not apply to builder {}: only GPU builders have a \
+                 build schedule",
+                builder_names(builders)
+            )));
+        }
         let pins = SchedulePins {
             overlap: !self.round_overlap.is_empty(),
             dp: !self.treelet_dp.is_empty(),
             climb_dp: !self.climb_dp.is_empty(),
             team_below: !self.team_below.is_empty(),
             level_dispatches: !self.level_dispatches.is_empty(),
+            sort_tile_items: self.sort_tile_items.is_some(),
+            wide_level_dispatches: !self.wide_level_dispatches.is_empty(),
         };
         let tune = match self.tune_schedule {
             TuneSchedule::On => true,
@@ -202,11 +212,11 @@ impl BenchArgs {
                 gpu.info.device_type != wgpu::DeviceType::Cpu && pins == SchedulePins::default()
             }
         };
-        tune.then_some(TuningOptions {
+        Ok(tune.then_some(TuningOptions {
             pairs: self.tune_pairs,
             pins,
             ..TuningOptions::default()
-        })
+        }))
     }
 
     /// The wide conversion's level dispatch counts asked for (None: the default), refused
@@ -261,10 +271,12 @@ struct BenchRecord {
     /// Treelet builders: the rounds' overlap reach (`--round-overlap`; null: one round after
     /// another).
     round_overlap: Option<u32>,
-    /// Treelet builders whose schedule was tuned (`--tune-schedule`): the tuning, whose kept
-    /// schedule is the one in the fields above and timed here.
+    /// GPU builders whose schedule was tuned (`--tune-schedule`): the tuning, whose kept
+    /// schedule is the one in the schedule fields (these and `sort_tile_items`,
+    /// `wide_level_dispatches`) and timed here.
     schedule_tuning: Option<TuningRecord>,
-    /// The radix sort's keys per invocation asked for (null: chosen per sort).
+    /// The radix sort's keys per invocation asked for or kept by a tuning (null: chosen per
+    /// sort).
     sort_tile_items: Option<u32>,
     /// The climbs' workgroup width in effect.
     climb_width: u32,
@@ -300,8 +312,8 @@ struct BenchRecord {
     sah: f32,
     /// Wide layout: the conversion's collapse (`--wide-collapse`: optimal or greedy).
     wide_collapse: Option<&'static str>,
-    /// Wide layout: the level dispatches asked for (`--wide-level-dispatches`; null: from the
-    /// tree's size).
+    /// Wide layout: the level dispatches asked for (`--wide-level-dispatches`) or kept by a
+    /// tuning (null: from the tree's size).
     wide_level_dispatches: Option<u32>,
     /// Wide layout: SAH of the traced wide tree (of its collapse, `wide_collapse`) and of the
     /// SAH-optimal collapse of the same binary tree (Ylitie et al.'s DP).
@@ -399,7 +411,7 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
     let collapses = args.trace.wide_collapses()?;
     let schedules = args.schedules(&builders)?;
     let wide_level_dispatches = args.wide_level_dispatches(layouts)?;
-    let tuning = args.tuning(gpu);
+    let tuning = args.tuning(gpu, &builders)?;
     // The binary layout once, the wide layout once per collapse and level dispatch count.
     let layout_runs: Vec<(Layout, WideOptions)> = layouts
         .iter()
@@ -444,7 +456,15 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
             tuning.as_ref(),
         )?;
         // The schedule timed: the tuned one where the schedule was tuned.
-        let schedule = report.tuned.as_ref().map_or(schedule, |t| t.schedule);
+        let tuned = report.tuned.as_ref().map(|t| t.schedule);
+        let schedule = tuned.map_or(schedule, |t| t.rounds);
+        let sort_tile_items = tuned
+            .and_then(|t| t.sort_tile_items)
+            .or(gpu.sort_tile_items);
+        let wide_level_dispatches = match tuned {
+            Some(t) => t.wide_level_dispatches,
+            None => wide_options.level_dispatches,
+        };
         let bvh = tree.download(gpu)?;
         let collapse = wide_options.collapse;
         let optimal = collapse == WideCollapse::Optimal;
@@ -543,7 +563,7 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
                 .map(|_| schedule.climb_dp().name()),
             round_overlap: schedule.overlap,
             schedule_tuning: report.tuned.as_ref().map(TuningRecord::from),
-            sort_tile_items: gpu.sort_tile_items,
+            sort_tile_items,
             climb_width: gpu.climb_width(),
             adapter: gpu.adapter_description(),
             triangles: scene.triangles.len(),
@@ -568,7 +588,7 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
             dispatch_ms,
             sah: sah_cost(&bvh, &params),
             wide_collapse: (layout == Layout::Wide).then_some(collapse.name()),
-            wide_level_dispatches: wide_options.level_dispatches,
+            wide_level_dispatches,
             wide_sah: wide_sah.map(|c| if optimal { c.1 } else { c.0 }),
             wide_sah_optimal: wide_sah.map(|c| c.1),
             wide_levels,

@@ -198,8 +198,15 @@ impl RadixSort {
     /// Sorts in tiles of 256 × `items` keys (one of `SORT_TILE_ITEMS`) whatever the length and
     /// device (tests; the result is the same for every tile).
     pub fn with_tile_items(mut self, items: u32) -> Result<Self> {
-        self.fixed_tile_items = Some(check_tile_items(items)?);
+        self.set_tile_items(Some(items))?;
         Ok(self)
+    }
+
+    /// The tile of the next sorts: 256 × `items` keys (one of `SORT_TILE_ITEMS`), or None: the
+    /// context's `sort_tile_items`, else `tile_items` of the length and device.
+    pub fn set_tile_items(&mut self, items: Option<u32>) -> Result<()> {
+        self.fixed_tile_items = items.map(check_tile_items).transpose()?;
+        Ok(())
     }
 
     /// Caps the workgroups per grid dimension below the device limit (at least 1), so that small

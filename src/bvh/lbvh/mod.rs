@@ -137,6 +137,12 @@ impl LbvhBuilder {
         Ok(self)
     }
 
+    /// The radix sort's tile in the next builds (`RadixSort::set_tile_items`; the same tree for
+    /// every tile).
+    pub fn set_sort_tile_items(&mut self, items: Option<u32>) -> Result<()> {
+        self.sort.set_tile_items(items)
+    }
+
     /// Builds `geometry`'s tree into `tree` in one submission and waits; returns the per-stage
     /// GPU times.
     pub fn build(

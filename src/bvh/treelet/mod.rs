@@ -302,6 +302,11 @@ impl TrbvhBuilder {
         self.rounds.schedule
     }
 
+    /// The LBVH's radix sort tile in the next builds (`LbvhBuilder::set_sort_tile_items`).
+    pub fn set_sort_tile_items(&mut self, items: Option<u32>) -> Result<()> {
+        self.lbvh.set_sort_tile_items(items)
+    }
+
     /// Timestamped passes one build records (at most: each round two).
     pub fn pass_count(&self) -> u32 {
         LBVH_PASSES + 3 + 2 * self.settings.gammas().len() as u32
