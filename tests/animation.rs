@@ -236,8 +236,61 @@ fn headless_animation_writes_one_png_per_frame() {
         }
         assert!(r["sah"].as_f64().unwrap() > 0.0);
         assert!(r["rays"].as_u64().unwrap() >= 32 * 24);
+        // A refit has no build schedule (its topology is built once).
+        assert!(r["schedule"].is_null());
     }
     std::fs::remove_dir_all(&out).ok();
+}
+
+/// `render --frames --tune-schedule on` tunes an lbvh rebuild's schedule on the first frame (its
+/// sort tile, on a CPU device too) and reports it in every frame's JSON; the frames' trees are
+/// those of the untuned run.
+#[cfg(feature = "app")]
+#[test]
+fn headless_animation_tunes_the_schedule_on_request() {
+    let run = |tune: &str| {
+        let out =
+            std::env::temp_dir().join(format!("treelet-anim-tune-{tune}-{}", std::process::id()));
+        let output = common::run_treelet(&[
+            "render",
+            "--scene",
+            "flag",
+            "--frames",
+            "2",
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--spp",
+            "1",
+            "--builder",
+            "lbvh",
+            "--tune-schedule",
+            tune,
+            "--json",
+            "--out",
+            out.to_str().expect("temp path is UTF-8"),
+        ]);
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(output.status.success(), "render failed: {stderr}");
+        std::fs::remove_dir_all(&out).ok();
+        String::from_utf8_lossy(&output.stdout)
+            .lines()
+            .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{e}: {l}")))
+            .collect::<Vec<serde_json::Value>>()
+    };
+    let (tuned, untuned) = (run("on"), run("off"));
+    assert_eq!(tuned.len(), 2);
+    for (t, u) in tuned.iter().zip(&untuned) {
+        let schedule = t["schedule"].as_str().expect("a schedule");
+        assert!(
+            schedule == "default" || schedule.starts_with("tile="),
+            "{schedule}"
+        );
+        assert_eq!(u["schedule"], "default");
+        assert_eq!(t["sah"], u["sah"]);
+        assert_eq!(t["nodes"], u["nodes"]);
+    }
 }
 
 #[test]

@@ -44,10 +44,7 @@ use super::tradeoff_panel::{StudyScene, TradeoffPanel};
 use super::tree_snapshot::TreeSnapshot;
 use crate::anim::{is_animation, load_animation};
 use crate::bvh::wide::Layout;
-use crate::bvh::{
-    tune_schedule, BuildSchedule, Builder, DeviceTrials, TreeUpdater, TunedSchedule, TuningOptions,
-    UpdateMode,
-};
+use crate::bvh::{tune_updater, Builder, TreeUpdater, TunedSchedule, TuningOptions, UpdateMode};
 use crate::device::{Geometry, Tree};
 use crate::gpu::{GpuContext, ParamSlab, Recorder};
 use crate::scene::{load_scene, Camera, Scene};
@@ -603,45 +600,30 @@ impl Viewer {
     /// shows in the panel and keeps the schedule.
     fn tune_schedule(&mut self, ctx: &GpuContext) {
         self.auto_tune_at = None;
-        let Some(space) = self.updater.tuning_space(ctx, self.geometry.triangle_count) else {
-            return;
-        };
-        let start = self.updater.build_schedule();
-        let tuned = DeviceTrials::new(
+        let tuned = tune_updater(
             ctx,
             &mut self.updater,
             &self.geometry,
             &self.scene.triangles,
             &mut self.tree,
-            start,
-        )
-        .and_then(|mut trials| {
-            tune_schedule(&mut trials, start, &space, &TuningOptions::default())
-        });
+            &TuningOptions::default(),
+            0.0,
+        );
         match tuned {
-            Ok(tuned) => {
+            Ok(Some(tuned)) => {
                 log::info!(
                     "viewer: schedule [{}] kept after {} builds in {:.0} ms",
                     tuned.schedule.label(),
                     tuned.builds,
                     tuned.wall_ms
                 );
-                self.use_schedule(tuned.schedule);
                 self.tuned = Some((tuned, self.scene.name.clone()));
             }
-            Err(e) => {
-                self.error = Some(format!("schedule tuning failed: {e}"));
-                self.use_schedule(start);
-            }
+            Ok(None) => {}
+            Err(e) => self.error = Some(format!("schedule tuning failed: {e}")),
         }
         // The tuning's builds left the same tree; the next frame builds it as usual.
         self.tree_dirty = true;
-    }
-
-    fn use_schedule(&mut self, schedule: BuildSchedule) {
-        if let Err(e) = self.updater.set_build_schedule(schedule) {
-            self.error = Some(format!("cannot use schedule [{}]: {e}", schedule.label()));
-        }
     }
 
     fn request_reference(&mut self) {

@@ -5,7 +5,7 @@
 use std::time::Instant;
 
 use super::treelet::{RoundSchedule, TreeletSettings};
-use super::tuning::{tune_schedule, DeviceTrials, TunedSchedule, TuningOptions};
+use super::tuning::{tune_updater, TunedSchedule, TuningOptions};
 use super::update::{TreeUpdater, UpdateMode};
 use super::wide::{check_leaf_sizes, Layout, WideConverter, WideOptions};
 use super::{build_sbvh, build_sweep_sah, Bvh, SahParams};
@@ -192,24 +192,17 @@ impl Builder {
                         .map_err(|e| Error::Gpu(format!("device poll failed: {e}")))
                         .map(drop)
                 })?;
-                let prims = triangles.len().try_into().unwrap_or(u32::MAX);
-                let space = updater.tuning_space(ctx, prims);
-                let tuned = match (tuning, space) {
-                    (Some(options), Some(space)) => {
-                        let start = updater.build_schedule();
-                        let mut trials = DeviceTrials::new(
-                            ctx,
-                            &mut updater,
-                            &geometry,
-                            triangles,
-                            &mut tree,
-                            start,
-                        )?;
-                        let tuned = tune_schedule(&mut trials, start, &space, options)?;
-                        updater.set_build_schedule(tuned.schedule)?;
-                        Some(tuned)
-                    }
-                    _ => None,
+                let tuned = match tuning {
+                    Some(options) => tune_updater(
+                        ctx,
+                        &mut updater,
+                        &geometry,
+                        triangles,
+                        &mut tree,
+                        options,
+                        0.0,
+                    )?,
+                    None => None,
                 };
                 let passes = updater.pass_count();
                 let mut reports = Vec::new();

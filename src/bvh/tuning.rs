@@ -307,6 +307,30 @@ fn same_in_effect(a: BuildSchedule, b: BuildSchedule, space: &TuningSpace) -> bo
     })
 }
 
+/// `schedule` with every value that is the default in effect unset (the same schedule, labelled
+/// by what differs from the default).
+fn without_defaults(schedule: BuildSchedule, space: &TuningSpace) -> BuildSchedule {
+    let r = schedule.rounds;
+    let round_levels = space.round_levels.unwrap_or(0);
+    BuildSchedule {
+        rounds: RoundSchedule {
+            level_dispatches: r.level_dispatches.filter(|&l| l != round_levels),
+            team_below: r
+                .team_below
+                .filter(|&t| t != RoundSchedule::default().team_below()),
+            dp: r.dp.filter(|&dp| dp != TreeletDp::default()),
+            climb_dp: r.climb_dp.filter(|&dp| dp != r.dp()),
+            overlap: r.overlap,
+        },
+        sort_tile_items: schedule
+            .sort_tile_items
+            .filter(|&t| t != space.sort_tile_items),
+        wide_level_dispatches: schedule
+            .wide_level_dispatches
+            .filter(|&l| Some(l) != space.wide_levels),
+    }
+}
+
 fn median(mut values: Vec<f64>) -> f64 {
     values.sort_by(f64::total_cmp);
     values[values.len() / 2]
@@ -401,11 +425,42 @@ pub fn tune_schedule(
         }
     }
     Ok(TunedSchedule {
-        schedule: kept,
+        schedule: without_defaults(kept, space),
         trials: record,
         builds,
         wall_ms: begin.elapsed().as_secs_f64() * 1e3,
     })
+}
+
+/// Tunes `updater`'s build schedule on `geometry` (whose CPU triangles are `triangles`) into
+/// `tree`, after untimed builds for `warmup_ms` of wall-clock time (a GPU that idled needs some
+/// before its timings mean anything), and sets the schedule kept. None where no tuning applies
+/// (`TreeUpdater::tuning_space`).
+pub fn tune_updater(
+    ctx: &GpuContext,
+    updater: &mut TreeUpdater,
+    geometry: &Geometry,
+    triangles: &[Triangle],
+    tree: &mut Tree,
+    options: &TuningOptions,
+    warmup_ms: f64,
+) -> Result<Option<TunedSchedule>> {
+    let Some(space) = updater.tuning_space(ctx, geometry.triangle_count) else {
+        return Ok(None);
+    };
+    let start = updater.build_schedule();
+    let tuned = {
+        let mut trials = DeviceTrials::new(ctx, updater, geometry, triangles, tree, start)?;
+        let begin = Instant::now();
+        while begin.elapsed().as_secs_f64() * 1e3 < warmup_ms {
+            trials.time_build(start)?;
+        }
+        tune_schedule(&mut trials, start, &space, options)
+    };
+    // The schedule kept, or the one given where the tuning failed.
+    let kept = tuned.as_ref().map_or(start, |t| t.schedule);
+    updater.set_build_schedule(kept)?;
+    tuned.map(Some)
 }
 
 /// What a trial's tree is compared by: the binary tree bit for bit, and of its wide layout (whose
@@ -592,6 +647,12 @@ mod tests {
         assert_eq!(kept.rounds.level_dispatches, Some(11));
         assert_eq!(kept.sort_tile_items, Some(16));
         assert_eq!(kept.wide_level_dispatches, Some(14));
+        // The kept schedule is labelled by what differs from the defaults.
+        assert_eq!(
+            kept.label(),
+            "d=11 climb-dp=loop overlap=6 tile=16 wd=14",
+            "{kept:?}"
+        );
         // Every kept schedule beat the one before it by the margin.
         for t in tuned.trials.iter().filter(|t| t.adopted) {
             assert!(t.candidate_ms.unwrap() < t.kept_ms.unwrap() * 0.98);

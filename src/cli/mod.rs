@@ -244,7 +244,7 @@ fn builder_names(builders: &[Builder]) -> String {
 /// has treelets: the option would be silently ignored.
 /// `--tune-schedule` of `bench` and `view`: tune a treelet builder's schedule (auto: on GPUs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-enum TuneSchedule {
+pub(crate) enum TuneSchedule {
     Auto,
     On,
     Off,
@@ -252,7 +252,7 @@ enum TuneSchedule {
 
 impl TuneSchedule {
     /// On or off as asked; None for auto.
-    fn forced(self) -> Option<bool> {
+    pub(crate) fn forced(self) -> Option<bool> {
         match self {
             TuneSchedule::Auto => None,
             TuneSchedule::On => Some(true),

@@ -12,7 +12,7 @@ use treelet::gpu::{GpuContext, Timing};
 use treelet::trace::{save_png, PathTracer};
 use treelet::{Error, Result};
 
-use super::{parse_update_mode, render_frames, TraceArgs};
+use super::{parse_update_mode, render_frames, TraceArgs, TuneSchedule};
 
 #[derive(Args, Debug)]
 pub struct RenderArgs {
@@ -34,6 +34,11 @@ pub struct RenderArgs {
     /// mrays_per_s, …)
     #[arg(long, requires = "frames")]
     pub json: bool,
+    /// With --frames: tune a GPU builder's build schedule on the first frame before rendering
+    /// (every schedule builds the same tree; see `bench --tune-schedule`): auto (on GPUs, the
+    /// default), on or off
+    #[arg(long, value_enum, requires = "frames")]
+    pub tune_schedule: Option<TuneSchedule>,
 }
 
 pub fn run(gpu: &GpuContext, args: &RenderArgs) -> Result<()> {

@@ -5,6 +5,9 @@
 //! `--spp` samples from the animation's camera → `<dir>/frame_0000.png`, …. CPU reference builders
 //! (`sweep`, `sbvh`) rebuild every frame from the CPU-evaluated triangles instead.
 //!
+//! On a GPU (or with `--tune-schedule on`) a GPU builder's build schedule is tuned on the first
+//! frame before the frames are rendered (`bvh::tune_updater`; the trees stay the same).
+//!
 //! Each frame is one recording and one submission (animate → build → trace → tonemap), as in the
 //! viewer; then its image is read back for the PNG and its tree for its SAH cost (not part of any
 //! timing). `--json`
@@ -18,7 +21,7 @@ use std::time::Instant;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use treelet::anim::load_animation;
-use treelet::bvh::{sah_cost, Builder, TreeUpdater, UpdateMode};
+use treelet::bvh::{sah_cost, tune_updater, Builder, TreeUpdater, TuningOptions, UpdateMode};
 use treelet::device::{Geometry, Tree};
 use treelet::gpu::{aggregate_stages, GpuContext, GpuTimer, ParamSlab, Recorder, StageTime};
 use treelet::trace::{save_png, PathTracer};
@@ -37,6 +40,9 @@ struct FrameRecord {
     t: f32,
     triangles: u32,
     nodes: u32,
+    /// GPU builders: the build schedule (as `bench` labels it; tuned on the first frame unless
+    /// `--tune-schedule off` or a CPU device).
+    schedule: Option<String>,
     /// GPU time of the animation kernel, or wall-clock time of the CPU evaluation (+ upload).
     animate_ms: Option<f64>,
     /// Sum of the GPU stage times (wall clock where the device has no timestamps; CPU time for
@@ -96,6 +102,32 @@ pub fn run(gpu: &GpuContext, args: &RenderArgs, frames: u32) -> Result<()> {
     let mut updater = TreeUpdater::new(gpu, mode, &params)?;
     updater.set_wide_collapse(args.trace.single_wide_collapse()?);
     updater.set_layout(gpu, layout);
+    let tune = args
+        .tune_schedule
+        .and_then(|t| t.forced())
+        .unwrap_or(gpu.info.device_type != wgpu::DeviceType::Cpu);
+    if tune {
+        // The first frame's geometry, after half a second of builds (GPU clocks).
+        if let Some(tuned) = tune_updater(
+            gpu,
+            &mut updater,
+            &geometry,
+            &first.triangles,
+            &mut tree,
+            &TuningOptions::default(),
+            500.0,
+        )? {
+            log::info!(
+                "schedule [{}] kept after {} builds in {:.0} ms",
+                tuned.schedule.label(),
+                tuned.builds,
+                tuned.wall_ms
+            );
+        }
+    }
+    let schedule = updater
+        .is_tunable()
+        .then(|| updater.build_schedule().label());
     let mut tracer = PathTracer::new(gpu, args.trace.render_settings(layout))?;
     let mut slab = ParamSlab::new(gpu);
     let bar = ProgressBar::new(u64::from(frames));
@@ -151,6 +183,7 @@ pub fn run(gpu: &GpuContext, args: &RenderArgs, frames: u32) -> Result<()> {
             scene: animation.name().to_owned(),
             builder: mode.name().to_owned(),
             layout: layout.name(),
+            schedule: schedule.clone(),
             frame,
             t,
             triangles: geometry.triangle_count,
