@@ -1,6 +1,7 @@
 //! Measuring one builder configuration for the trade-off study, the way `treelet bench` does:
-//! build (GPU builders: one warm-up build, then the median of `repeats` timed builds, GPU
-//! timestamps; CPU builders: CPU time of one build), validate, SAH, then trace diffuse paths with
+//! build (GPU builders: one warm-up build, on a GPU a tuning of the build schedule as `bench` does
+//! by default, then the median of `repeats` timed builds, GPU timestamps; CPU builders: CPU time
+//! of one build), validate, SAH, then trace diffuse paths with
 //! the caller's tracer: a warm-up trace, then the median throughput of `repeats` timed traces.
 //! Every configuration traces the same camera, image size and sample count from the same seeds.
 //! Studies on a shared machine measure all configurations in several round-robin passes and keep
@@ -9,7 +10,7 @@
 use super::Measurement;
 use crate::bvh::treelet::RoundSchedule;
 use crate::bvh::wide::{Layout, WideOptions};
-use crate::bvh::{sah_cost, validate, validate_with_references, Builder, SahParams};
+use crate::bvh::{sah_cost, validate, validate_with_references, Builder, SahParams, TuningOptions};
 use crate::gpu::{GpuContext, Timing};
 use crate::scene::{Camera, Scene};
 use crate::trace::PathTracer;
@@ -48,7 +49,9 @@ pub fn measure(
         Layout::Binary,
         WideOptions::default(),
         RoundSchedule::default(),
-        None,
+        (ctx.info.device_type != wgpu::DeviceType::Cpu)
+            .then(TuningOptions::default)
+            .as_ref(),
     )?;
     let bvh = tree.download(ctx)?;
     let validation = if builder.duplicates_references() {
