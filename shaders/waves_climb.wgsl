@@ -2,12 +2,17 @@
 // workgroup: the waves near the end hold few treelets, where a dispatch each would mostly cost
 // its launch. Each wave: the candidates sorted (step 1), a barrier, the treelets optimized
 // (step 2), a barrier; it ends with the first wave that has no treelet (none is left then: the
-// CPU twin ends likewise). Node data is only shared within the workgroup: storageBarriers order
-// it.
+// CPU twin ends likewise). A wave of fewer than min(params.team_below, TEAM_WAVE) treelets is
+// optimized by the workgroup's TEAMS teams of 32 invocations, a treelet per team at a time
+// (treelet_team.wgsl), as in treelets_climb.wgsl; a larger one a treelet per invocation. Node
+// data is only shared within the workgroup: storageBarriers order it.
 #include "bvh_node.wgsl"
 #include "treelet_round.wgsl"
 
 const WORKGROUP: u32 = 128u;
+const TEAMS: u32 = 4u;
+// From this many treelets on, a wave takes longer by teams than a treelet per invocation.
+const TEAM_WAVE: u32 = 32u;
 
 @group(0) @binding(0) var<uniform> params: RoundParams;
 @group(0) @binding(1) var<storage, read_write> nodes: array<BvhNode>;
@@ -20,8 +25,11 @@ const WORKGROUP: u32 = 128u;
 @group(0) @binding(7) var<storage, read_write> candidate_waves: array<atomic<u32>>;
 @group(0) @binding(8) var<storage, read_write> lists: array<u32>;
 @group(0) @binding(9) var<storage, read_write> wave_state: array<atomic<u32>>;
+// `treelet::subsets_by_size`, for the teams.
+@group(0) @binding(10) var<storage, read> subset_order: array<u32>;
 
 #include "treelet_dp.wgsl"
+#include "treelet_team.wgsl"
 #include "treelet_waves.wgsl"
 #include "treelet_wave_optimize.wgsl"
 
@@ -43,8 +51,23 @@ fn main(@builtin(local_invocation_index) lid: u32) {
         if treelets == 0u {
             break;
         }
-        for (var i = lid; i < treelets; i += WORKGROUP) {
-            optimize_entry(lists[ops_base() + i], wave);
+        if treelets < min(params.team_below, TEAM_WAVE) {
+            let team = lid / TEAM_LANES;
+            let lane = lid % TEAM_LANES;
+            for (var done = 0u; done < treelets; done += TEAMS) {
+                let i = done + team;
+                let has_treelet = i < treelets;
+                let entry = lists[ops_base() + min(i, treelets - 1u)];
+                queued = 0u;
+                optimize_treelet_team(entry & NODE_MASK, has_treelet, team, lane);
+                if has_treelet && lane == 0u {
+                    finish_entry(entry, wave);
+                }
+            }
+        } else {
+            for (var i = lid; i < treelets; i += WORKGROUP) {
+                optimize_entry(lists[ops_base() + i], wave);
+            }
         }
         storageBarrier();
         workgroupBarrier();

@@ -613,15 +613,25 @@ fn overlapped_rounds_on_the_gpu_equal_the_cpu_twin() {
         let geometry = Geometry::upload(gpu(), &scene).unwrap();
         builder.set_schedule(RoundSchedule::default());
         let sequential = builder.build_stages(gpu(), &geometry).unwrap();
-        for levels in [None, Some(0), Some(1)] {
+        // (level dispatches, team threshold): the climb's waves by teams where they are few.
+        let schedules = [
+            (None, None),
+            (Some(0), None),
+            (Some(1), None),
+            (None, Some(u32::MAX)),
+            (Some(0), Some(u32::MAX)),
+        ];
+        for (levels, team_below) in schedules {
             builder.set_schedule(RoundSchedule {
                 level_dispatches: levels,
+                team_below,
                 overlap: Some(6),
                 ..RoundSchedule::default()
             });
             let stages = builder.build_stages(gpu(), &geometry).unwrap();
             let what = format!(
-                "{} triangles, {settings:?}, level dispatches {levels:?}",
+                "{} triangles, {settings:?}, level dispatches {levels:?}, teams below \
+                 {team_below:?}",
                 scene.triangles.len()
             );
             let mut cpu = stages.lbvh.clone();

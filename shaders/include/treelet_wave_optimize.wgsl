@@ -2,14 +2,21 @@
 // optimize treelets (waves_optimize.wgsl, waves_climb.wgsl) include it after treelet_dp.wgsl and
 // treelet_waves.wgsl.
 
-// Step 2 of wave `wave` for one treelet entry: the treelet (treelet_dp.wgsl), then what it
-// finished: its root, in its round; the internal nodes it rewrote, in its round and the ones
-// before (their place in the sequential rounds came first); and the candidates it may have made.
+// Step 2 of wave `wave` for one treelet entry: the treelet (treelet_dp.wgsl), then
+// `finish_entry`.
 fn optimize_entry(entry: u32, wave: u32) {
+    queued = 0u;
+    optimize_treelet(entry & NODE_MASK);
+    finish_entry(entry, wave);
+}
+
+// What the treelet of `entry` finished in wave `wave` (its write-back's queue, `queued` entries,
+// none when it kept its topology): its root, in its round; the internal nodes it rewrote, in its
+// round and the ones before (their place in the sequential rounds came first); and the
+// candidates it may have made.
+fn finish_entry(entry: u32, wave: u32) {
     let node = entry & NODE_MASK;
     let round = entry >> ROUND_SHIFT;
-    queued = 0u;
-    optimize_treelet(node);
     let rounds = params.rounds;
     done[node * rounds + round] = wave;
     let next = round + 1u;

@@ -215,8 +215,6 @@ impl Dimension {
                     })
                 })
                 .to_vec(),
-            // Teams do not apply to overlapped rounds.
-            Dimension::TeamBelow if k.overlap.is_some() => Vec::new(),
             Dimension::TeamBelow => TEAM_THRESHOLDS
                 .map(|below| {
                     rounds(RoundSchedule {
@@ -302,9 +300,7 @@ impl Dimension {
 
 /// Whether two schedules run the same way.
 fn same_in_effect(a: BuildSchedule, b: BuildSchedule, space: &TuningSpace) -> bool {
-    Dimension::ALL.iter().all(|d| {
-        d.same_value(a, b, space) || (*d == Dimension::TeamBelow && a.rounds.overlap.is_some())
-    })
+    Dimension::ALL.iter().all(|d| d.same_value(a, b, space))
 }
 
 /// `schedule` with every value that is the default in effect unset (the same schedule, labelled
@@ -589,13 +585,16 @@ mod tests {
     };
 
     /// A build time with one best value per dimension: overlap 6, the loop DP in the climb,
-    /// teams below 16 (no teams apply with the overlap), 11 dispatched levels, tiles of 16 keys
-    /// per invocation, 14 wide levels dispatched.
+    /// teams below 16, 11 dispatched levels, tiles of 16 keys per invocation, 14 wide levels
+    /// dispatched.
     fn cost(b: BuildSchedule) -> f64 {
         let s = b.rounds;
         let mut ms = 10.0;
         if s.overlap.is_none() {
-            ms += 3.0 + if s.team_below() == 16 { -1.0 } else { 0.0 };
+            ms += 3.0;
+        }
+        if s.team_below() == 16 {
+            ms -= 0.5;
         }
         if s.climb_dp() == TreeletDp::Loop {
             ms -= 0.5;
@@ -650,17 +649,17 @@ mod tests {
         // The kept schedule is labelled by what differs from the defaults.
         assert_eq!(
             kept.label(),
-            "d=11 climb-dp=loop overlap=6 tile=16 wd=14",
+            "d=11 t=16 climb-dp=loop overlap=6 tile=16 wd=14",
             "{kept:?}"
         );
         // Every kept schedule beat the one before it by the margin.
         for t in tuned.trials.iter().filter(|t| t.adopted) {
             assert!(t.candidate_ms.unwrap() < t.kept_ms.unwrap() * 0.98);
         }
-        // Teams were never timed once the rounds overlapped (they do not apply).
+        // Teams were timed with the overlap too (they apply to its climb).
         assert!(timed
             .iter()
-            .all(|s| s.rounds.overlap.is_none() || s.rounds.team_below.is_none()));
+            .any(|s| s.rounds.overlap.is_some() && s.rounds.team_below.is_some()));
         assert_eq!(tuned.builds as usize, timed.len() + tuned.trials.len());
     }
 
@@ -708,7 +707,7 @@ mod tests {
         assert!(timed.iter().all(|s| s.rounds.overlap.is_none()
             && s.rounds.level_dispatches == Some(14)
             && s.sort_tile_items == Some(32)));
-        // Without the overlap, teams below 16 pay.
+        // Teams below 16 pay.
         assert_eq!(tuned.schedule.rounds.team_below(), 16);
         assert_eq!(tuned.schedule.rounds.climb_dp(), TreeletDp::Loop);
         assert_eq!(tuned.schedule.wide_level_dispatches, Some(14));
@@ -727,7 +726,7 @@ mod tests {
         let refused: Vec<_> = tuned.trials.iter().filter(|t| t.other_tree).collect();
         assert_eq!(refused.len(), 1, "refused once, not retried");
         assert!(refused[0].candidate_ms.is_none() && !refused[0].adopted);
-        // The next best dimension still won.
+        // The other dimensions still won.
         assert_eq!(tuned.schedule.rounds.team_below(), 16);
     }
 

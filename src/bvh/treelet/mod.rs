@@ -512,9 +512,16 @@ impl TrbvhBuilder {
                     dispatched: levels * rounds,
                     dp: self.rounds.schedule.dp(),
                     climb_dp: self.rounds.schedule.climb_dp(),
+                    team_below: self.rounds.schedule.team_below(),
                 };
-                self.waves
-                    .record(rec, n, &state, self.rounds.roots(), &overlap);
+                self.waves.record(
+                    rec,
+                    n,
+                    &state,
+                    self.rounds.roots(),
+                    self.rounds.subsets(),
+                    &overlap,
+                );
             }
             None => {
                 for r in 0..gammas.len() {

@@ -32,6 +32,7 @@ use super::dp_unrolled::{TreeletDp, TREELET_DP_LOOP_OVERRIDE, TREELET_SIZE_OVERR
 use super::nodes_level::NODES_LEVEL;
 use super::treelets_climb::TREELETS_CLIMB;
 use super::treelets_optimize::TREELETS_OPTIMIZE;
+use super::waves::Overlap;
 use crate::gpu::constants::{MAX_LEVEL_DISPATCHES, MAX_TREELET_SIZE, MIN_TREELET_SIZE};
 use crate::gpu::{
     storage_buffer, storage_buffer_zeroed, GpuContext, Grid, ItemCount, Kernel, KernelDecl, Pass,
@@ -72,20 +73,13 @@ const _: () = assert!(std::mem::size_of::<RoundParams>() == 64);
 
 impl RoundParams {
     /// The parameters of the overlapped rounds' kernels (`waves`) for a tree of `n` leaves:
-    /// `rounds` rounds of `treelet_size` leaves (γ_r = treelet_size · 2^r), the reach, wave
-    /// `wave`.
-    pub(crate) fn waves(
-        n: u32,
-        treelet_size: u32,
-        model: &CostModel,
-        rounds: u32,
-        reach: u32,
-        wave: u32,
-    ) -> Self {
+    /// `overlap`'s rounds (γ_r = treelet size · 2^r), reach and team threshold, wave `wave`.
+    pub(crate) fn waves(n: u32, overlap: &Overlap, wave: u32) -> Self {
+        let model = &overlap.model;
         Self {
             count: n,
             row_pitch: 0,
-            gamma: treelet_size,
+            gamma: overlap.treelet_size,
             max_leaf_size: model.max_leaf_size,
             ci: model.ci,
             ct: model.ct,
@@ -93,11 +87,11 @@ impl RoundParams {
             level_dispatches: 0,
             level: 0,
             levels_only: 0,
-            team_below: 0,
+            team_below: overlap.team_below,
             next_gamma: u32::MAX,
             level_first: 0,
-            rounds,
-            reach,
+            rounds: overlap.rounds,
+            reach: overlap.reach,
             wave,
         }
     }
@@ -194,8 +188,9 @@ pub struct RoundSchedule {
     pub level_dispatches: Option<u32>,
     /// Levels (and climbed waves) of fewer treelets than this are optimized by teams of 32
     /// invocations, the others one treelet per invocation; 0 never uses teams, u32::MAX uses them
-    /// for every level and every climbed wave of fewer than 32 treelets. None:
-    /// `DEFAULT_TEAM_BELOW` (never).
+    /// for every level and every climbed wave of fewer than 32 treelets. With overlapped rounds
+    /// it applies to the climbed waves only (a dispatched wave runs a treelet per invocation).
+    /// None: `DEFAULT_TEAM_BELOW` (never).
     pub team_below: Option<u32>,
     /// How a lone invocation's DP is written (`TreeletDp`) in the dispatched levels; None:
     /// written out.
@@ -207,7 +202,7 @@ pub struct RoundSchedule {
     /// `WorkingTree::optimize_overlapped`), each round starting on a root once it and its
     /// ancestors within the reach are done in the round before; None: the rounds one after
     /// another. The level dispatches (above) times the rounds are the waves dispatched, the
-    /// climb takes the rest; teams do not apply.
+    /// climb takes the rest; teams apply to the climb's waves.
     pub overlap: Option<u32>,
 }
 
@@ -419,6 +414,11 @@ impl TreeletRounds {
             .get(ctx, round.treelet_size, self.schedule.climb_dp());
         rec.pass("treelets climb")
             .dispatch(climb, Grid::workgroups(1, 1), &params, &climb_buffers);
+    }
+
+    /// `subsets_by_size`, which the teams read.
+    pub(crate) fn subsets(&self) -> &wgpu::Buffer {
+        &self.subsets
     }
 
     /// The roots bucketed by level (`reserve` allocates them).

@@ -23,7 +23,8 @@ kernel!(pub WAVES_OPTIMIZE: RoundParams = "waves_optimize"::"main", [32, 1, 1],
     [ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite,
      ReadWrite]);
 kernel!(pub WAVES_CLIMB: RoundParams = "waves_climb"::"main", [128, 1, 1],
-    [ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite]);
+    [ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite,
+     Read]);
 
 /// The reach that keeps the rounds' trees (`RoundSchedule::overlap`): a treelet spans six
 /// levels, so a round starts on a root once it and its ancestors six levels up are done in the
@@ -72,6 +73,8 @@ pub(crate) struct Overlap {
     pub dispatched: u32,
     pub dp: TreeletDp,
     pub climb_dp: TreeletDp,
+    /// Climbed waves of fewer treelets than this (and than 32) are optimized by teams.
+    pub team_below: u32,
 }
 
 impl OverlappedRounds {
@@ -119,13 +122,15 @@ impl OverlappedRounds {
 
     /// Records the rounds over a working tree of `n` leaves (capacity) whose first schedule
     /// (`TreeletRounds::record_levels` of the first round, with its roots in `roots`) was
-    /// recorded before. Call `reserve` first.
+    /// recorded before; `subsets` is `subsets_by_size`, for the climb's teams. Call `reserve`
+    /// first.
     pub fn record(
         &self,
         rec: &mut Recorder<'_>,
         n: u32,
         state: &TreeletState<'_>,
         roots: &wgpu::Buffer,
+        subsets: &wgpu::Buffer,
         overlap: &Overlap,
     ) {
         let ctx = rec.ctx;
@@ -147,16 +152,7 @@ impl OverlappedRounds {
         }
         encoder.copy_buffer_to_buffer(state.schedule, 0, &b.state, ODD_CANDIDATES_WORD * 4, 4);
         encoder.copy_buffer_to_buffer(state.schedule, SCHEDULE_ARGS * 4, &b.find_args, 0, 12);
-        let params = |wave| {
-            RoundParams::waves(
-                n,
-                overlap.treelet_size,
-                &overlap.model,
-                rounds,
-                overlap.reach,
-                wave,
-            )
-        };
+        let params = |wave| RoundParams::waves(n, overlap, wave);
         let find_buffers = [
             state.nodes,
             state.parents,
@@ -180,6 +176,8 @@ impl OverlappedRounds {
         ];
         let mut optimize_buffers = climb_buffers.to_vec();
         optimize_buffers.push(&b.find_args);
+        let mut climb_buffers = climb_buffers.to_vec();
+        climb_buffers.push(subsets);
         let find = self.find.get_or_init(|| Kernel::new(ctx, &WAVES_FIND));
         let optimize = self.optimize.get(ctx, overlap.treelet_size, overlap.dp);
         let mut pass = rec.pass("treelets");
