@@ -11,7 +11,7 @@ use super::wide::{check_leaf_sizes, Layout, WideConverter, WideOptions};
 use super::{build_sbvh, build_sweep_sah, Bvh, SahParams};
 use crate::device::{Geometry, Tree};
 use crate::gpu::{GpuContext, GpuTimer, ParamSlab, Recorder, StageTime, Timing, Warmup};
-use crate::scene::{Scene, Triangle};
+use crate::scene::Scene;
 use crate::{Error, Result};
 
 /// A BVH construction method, selectable by name on the command line.
@@ -177,16 +177,19 @@ impl Builder {
                 updater.set_round_schedule(schedule);
                 let mut slab = ParamSlab::new(ctx);
                 let triangles = &scene.triangles;
+                // One build, submitted (timed by `timer` where given); the updater and the tree
+                // are passed in, so that the tuning can use them between builds.
+                let mut build_once = |updater: &mut TreeUpdater,
+                                      tree: &mut Tree,
+                                      timer: Option<&mut GpuTimer>|
+                 -> Result<()> {
+                    let mut rec = Recorder::new(ctx, &mut slab, timer);
+                    let result = updater.record(&mut rec, &geometry, triangles, tree);
+                    rec.submit();
+                    result.map(drop)
+                };
                 let warmup = timing.warm_up(|| {
-                    build_once(
-                        ctx,
-                        &mut slab,
-                        &mut updater,
-                        &geometry,
-                        triangles,
-                        &mut tree,
-                        None,
-                    )?;
+                    build_once(&mut updater, &mut tree, None)?;
                     ctx.device
                         .poll(wgpu::PollType::wait_indefinitely())
                         .map_err(|e| Error::Gpu(format!("device poll failed: {e}")))
@@ -209,15 +212,7 @@ impl Builder {
                 for _ in 0..timing.repeats.max(1) {
                     let mut timer = GpuTimer::new(ctx, passes);
                     let start = Instant::now();
-                    build_once(
-                        ctx,
-                        &mut slab,
-                        &mut updater,
-                        &geometry,
-                        triangles,
-                        &mut tree,
-                        Some(&mut timer),
-                    )?;
+                    build_once(&mut updater, &mut tree, Some(&mut timer))?;
                     let stages = timer.read(ctx)?;
                     let wall_ms = start.elapsed().as_secs_f64() * 1e3;
                     let gpu_ms: Option<f64> = stages.iter().map(|s| s.ms).sum();
@@ -244,22 +239,6 @@ impl Builder {
             }
         }
     }
-}
-
-/// Records one update of `tree` by `updater` and submits it (timed by `timer` where given).
-fn build_once(
-    ctx: &GpuContext,
-    slab: &mut ParamSlab,
-    updater: &mut TreeUpdater,
-    geometry: &Geometry,
-    triangles: &[Triangle],
-    tree: &mut Tree,
-    timer: Option<&mut GpuTimer>,
-) -> Result<()> {
-    let mut rec = Recorder::new(ctx, slab, timer);
-    let result = updater.record(&mut rec, geometry, triangles, tree);
-    rec.submit();
-    result.map(drop)
 }
 
 /// The wide conversion of `layout` (none for the binary layout).
