@@ -1,14 +1,15 @@
 #!/usr/bin/env bash
 # Everything a lent GPU is asked to measure, in one `device` call that fits a short lease, step by
-# step in this order (the trace's correctness and the A/Bs first): the test binaries ("tests"), the
-# binary-vs-wide table ("layouts"), the round schedules (the DP's forms in the dispatched levels
-# and the climb, the overlapped rounds, the team threshold TEAMS, and levels dispatched where
-# LEVELS is set: "schedules"), the changes of scripts/variants/ beside this commit ("variants", when
-# `bash scripts/gpu-variants.sh build` packed them), build scaling
-# ("scaling"), the wide conversion's level dispatches ("widelevels"), where a treelet level's
-# time goes ("probe", when `bash scripts/gpu-probe.sh build`
-# packed its variants), every dispatch of lbvh timed per sort tile ("profile") and every dispatch
-# of trbvh and trbvh-split with the wide conversion timed ("kernels"). Each step is capped
+# step in this order (the trace's correctness and the build's figures first): the test binaries
+# ("tests"), the binary-vs-wide table ("layouts"), build scaling with each GPU builder's schedule
+# tuned ("scaling"), the round schedules each fixed beside the default and the tuned one (the
+# DP's forms in the dispatched levels and the climb, the overlapped rounds, the team threshold
+# TEAMS, and levels dispatched where LEVELS is set: "schedules"), the changes of scripts/variants/
+# beside this commit ("variants", when `bash scripts/gpu-variants.sh build` packed them), the wide
+# conversion's level dispatches ("widelevels"), where a treelet level's time goes ("probe", when
+# `bash scripts/gpu-probe.sh build` packed its variants), every dispatch of lbvh timed per sort
+# tile ("profile") and every dispatch of trbvh and trbvh-split with the wide conversion timed
+# ("kernels"). Each step is capped
 # so that the whole run ends within BUDGET seconds (default 500; STEPS picks some of the steps, e.g.
 # STEPS="tests schedules"). After every step the results so far are packed into $OUT/results.tar.gz,
 # so a call stopped at its limit still brings back what ran. A summary is printed last.
@@ -33,7 +34,7 @@ save() { tar -C $res -czf "$final/results.tar.gz" .; }
 step() {
   local name=$1 cap=$2 left
   shift 2
-  case " ${STEPS:-tests schedules scaling widelevels probe variants layouts profile kernels} " in
+  case " ${STEPS:-tests layouts scaling schedules variants widelevels probe profile kernels} " in
     *" $name "*) ;;
     *) return ;;
   esac
@@ -104,15 +105,18 @@ step tests 150 bash -c tests
 # The trace first: both layouts on every scene (their ray counts must agree), then the variants.
 step layouts 80 env SCENES="conference crytek_sponza sibenik lost_empire armadillo" OPTIMAL_SCENES="conference lost_empire" \
   REPEATS=11 bash scripts/gpu-layouts.sh
+# Build scaling with every treelet builder's schedule tuned (bench's default on a GPU; README,
+# "Schedule tuning"): the build times to report and the schedule each scene keeps.
+step scaling 130 bash -c scaling
 # The DP's forms (dispatched levels and climb), the overlapped rounds and teams on real builds,
-# before the variants: the questions the last GPUs left open (README, "On an NVIDIA H200, second
-# session", and "Rounds can overlap"). LEVELS adds the sweep of levels dispatched.
-step schedules 170 env SCENES="${SCHEDULE_SCENES:-conference crytek_sponza sibenik field:707 field:2000}" \
+# each fixed, beside the default and the tuned schedule: the questions the last GPUs left open
+# (README, "On an NVIDIA H200, second session", and "Rounds can overlap"). LEVELS adds the sweep
+# of levels dispatched.
+step schedules 120 env SCENES="${SCHEDULE_SCENES:-conference sibenik field:707 field:2000}" \
   LEVELS="${LEVELS:-}" TEAMS="${TEAMS:-4,16,256}" CLIMBS=" " REPEATS=11 bash scripts/gpu-schedules.sh
 if ls .gpu/variant-*.xz > /dev/null 2>&1; then
   step variants 150 env TREELET=$TREELET bash scripts/gpu-variants.sh run
 fi
-step scaling 100 bash -c scaling
 step widelevels 60 bash -c wide_levels
 if ls .gpu/probe-*.xz > /dev/null 2>&1; then
   step probe 40 env SCENES="conference" REPEATS=5 TREELET=$TREELET bash scripts/gpu-probe.sh run
