@@ -158,9 +158,9 @@ for name in ("scaling.jsonl", "baseline.jsonl"):
         if tuning:
             kept = [t for t in tuning["trials"] if t["adopted"]]
             first = tuning["trials"][0] if tuning["trials"] else {}
-            print(f"      tuned in {tuning['builds']} builds, {tuning['wall_ms']:.0f} ms: "
-                  f"{kept[-1]['schedule'] if kept else 'default'}"
-                  f" ({first.get('kept_ms') or 0:.3f} -> {(kept[-1]['candidate_ms'] if kept else first.get('kept_ms')) or 0:.3f} ms)"
+            print(f"      tuned in {tuning['builds']} builds, {tuning['wall_ms']:.0f} ms: {tuning['kept']}"
+                  f" (first comparison's default {first.get('kept_ms') or 0:.3f} ms,"
+                  f" last kept {(kept[-1]['candidate_ms'] if kept else first.get('kept_ms')) or 0:.3f} ms)"
                   + (" REFUSED: " + ", ".join(t["schedule"] for t in tuning["trials"] if t["other_tree"])
                      if any(t["other_tree"] for t in tuning["trials"]) else ""))
 PY

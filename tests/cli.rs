@@ -305,6 +305,7 @@ fn bench_tunes_the_schedule_on_request() {
             .rev()
             .find(|t| t["adopted"] == true)
             .map_or("default", |t| t["schedule"].as_str().unwrap());
+        assert!(record["schedule_tuning"]["kept"].is_string());
         let parts: Vec<&str> = kept.split(' ').collect();
         let value = |key: &str| parts.iter().find_map(|p| p.strip_prefix(key));
         let tile = value("tile=").map(|t| t.parse::<u64>().unwrap());

@@ -337,9 +337,11 @@ struct BenchRecord {
     mrays_per_s_spread: Option<Spread>,
 }
 
-/// A schedule tuning in the JSON: its builds and wall-clock time, and every trial in order.
+/// A schedule tuning in the JSON: the schedule kept (labelled by what differs from the defaults),
+/// the tuning's builds and wall-clock time, and every trial in order.
 #[derive(Serialize)]
 struct TuningRecord {
+    kept: String,
     builds: u32,
     wall_ms: f64,
     trials: Vec<TrialRecord>,
@@ -360,6 +362,7 @@ struct TrialRecord {
 impl From<&TunedSchedule> for TuningRecord {
     fn from(tuned: &TunedSchedule) -> Self {
         Self {
+            kept: tuned.schedule.label(),
             builds: tuned.builds,
             wall_ms: tuned.wall_ms,
             trials: tuned
