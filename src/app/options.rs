@@ -23,7 +23,7 @@ pub struct ViewerOptions {
     pub screenshot: Option<PathBuf>,
     /// Exit (status 0) after this many presented frames.
     pub exit_after_frames: Option<u64>,
-    /// Tune a treelet builder's schedule: at its first frame (true), only on request (false), or
+    /// Tune a GPU builder's build schedule: at its first frame (true), only on request (false), or
     /// None: on a GPU after a few seconds of frames.
     pub tune_schedule: Option<bool>,
 }

@@ -1,6 +1,6 @@
 //! The egui side panel: device, performance (frame time plot, Mrays/s), scene and tree statistics,
 //! animation playback (play/pause/step/speed/seek, animate time, the SAH-over-time plot of rebuild
-//! versus refit), the traced node layout and its size, a treelet builder's schedule and its last
+//! versus refit), the traced node layout and its size, a GPU builder's build schedule and its last
 //! tuning, per-stage build times, SAH against the CPU sweep reference, and the controls (scene,
 //! builder or refit, node layout, leaf size, schedule tuning, samples per frame, bounces,
 //! per-frame rebuild, camera reset, screenshot). It only edits `PanelControls`
@@ -87,7 +87,7 @@ pub struct PanelActions {
     pub screenshot: bool,
     /// Animation clock: single step or seek.
     pub clock: ClockRequest,
-    /// Tune the treelet builder's schedule now.
+    /// Tune the GPU builder's build schedule now.
     pub tune_schedule: bool,
 }
 

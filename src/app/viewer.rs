@@ -20,9 +20,9 @@
 //! shown in the panel; the previous scene stays and the viewer keeps running. Displaying the
 //! image and the panel is `window_app`'s part.
 //!
-//! On a GPU a treelet builder's schedule is tuned once its updater has run `AUTO_TUNE_FRAMES`
-//! frames (the clocks are up by then; `bvh::tune_schedule`, which waits for its builds: about a
-//! hundred of them, a second or less), at once where `--tune-schedule on` asks, and again on the
+//! On a GPU the build schedule of a GPU builder's rebuilds is tuned once its updater has run
+//! `AUTO_TUNE_FRAMES` frames (the clocks are up by then; `bvh::tune_updater`, which waits for its
+//! builds: about a hundred of them, a second or less), at once where `--tune-schedule on` asks, and again on the
 //! panel's request; every schedule builds the same tree, so only the build times change.
 
 use std::sync::Arc;
@@ -51,7 +51,7 @@ use crate::scene::{load_scene, Camera, Scene};
 use crate::trace::{PathTracer, RenderSettings};
 use crate::Result;
 
-/// Frames a GPU's treelet updater runs before its schedule is tuned.
+/// Frames a GPU builder's updater runs on a GPU before its build schedule is tuned.
 const AUTO_TUNE_FRAMES: u64 = 120;
 
 /// The current tree's SAH needs measuring: now (a new tree) or when the interval has passed

@@ -240,9 +240,8 @@ fn builder_names(builders: &[Builder]) -> String {
     names.join(", ")
 }
 
-/// Fails when one of the treelet `options` (flag, given) is given but no builder in `builders`
-/// has treelets: the option would be silently ignored.
-/// `--tune-schedule` of `bench` and `view`: tune a treelet builder's schedule (auto: on GPUs).
+/// `--tune-schedule` of `bench`, `view` and `render --frames`: tune a GPU builder's build
+/// schedule (auto: on GPUs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub(crate) enum TuneSchedule {
     Auto,
@@ -261,6 +260,8 @@ impl TuneSchedule {
     }
 }
 
+/// Fails when one of the treelet `options` (flag, given) is given but no builder in `builders`
+/// has treelets: the option would be silently ignored.
 fn refuse_treelet_options(builders: &[Builder], options: &[(&str, bool)]) -> Result<()> {
     let has_treelets = builders.iter().any(|b| b.treelet_settings().is_some());
     match options.iter().find(|(_, given)| *given) {

@@ -32,9 +32,10 @@ pub struct ViewArgs {
     /// Write a PNG of the whole window (image and panel) after --exit-after-frames frames
     #[arg(long, requires = "exit_after_frames")]
     screenshot: Option<PathBuf>,
-    /// Tune a treelet builder's schedule on this device and scene (every schedule builds the same
-    /// tree; the panel's Tune button does it at any time): auto (on GPUs, after a few seconds of
-    /// frames, once per builder), on (at once, also on CPU devices, where it takes minutes) or off
+    /// Tune a GPU builder's build schedule on this device and scene (every schedule builds the
+    /// same tree; the panel's "Tune schedule" does it at any time): auto (on GPUs, after a few
+    /// seconds of frames, once per builder), on (at once, also on CPU devices, where it takes
+    /// long) or off
     #[arg(long, value_enum, default_value_t = TuneSchedule::Auto)]
     tune_schedule: TuneSchedule,
     /// Exit after rendering this many frames
