@@ -26,8 +26,9 @@ use crate::{Error, Result};
 /// Team thresholds a tuning tries (treelets per level below which teams of 32 optimize them; 0:
 /// never).
 const TEAM_THRESHOLDS: [u32; 4] = [0, 4, 16, 256];
-/// How far from the device's default the level dispatches a tuning tries lie.
-const LEVEL_DISPATCH_STEP: u32 = 3;
+/// How far from the device's default the treelet level dispatches a tuning tries lie (the
+/// overlapped rounds dispatch this many waves per round, and may want fewer).
+const LEVEL_DISPATCH_STEPS: [i32; 3] = [-6, -3, 3];
 /// The same for the wide conversion's level dispatches (the default is about every level a deep
 /// wide tree has, plus a few: a level past the tree dispatches no workgroups).
 const WIDE_LEVEL_STEPS: [i32; 3] = [-6, -3, 3];
@@ -225,18 +226,21 @@ impl Dimension {
                 .to_vec(),
             Dimension::LevelDispatches => {
                 let default = space.round_levels.unwrap_or(0);
-                [
-                    None,
-                    Some(default.saturating_sub(LEVEL_DISPATCH_STEP)),
-                    Some((default + LEVEL_DISPATCH_STEP).min(MAX_LEVEL_DISPATCHES)),
-                ]
-                .map(|level_dispatches| {
-                    rounds(RoundSchedule {
-                        level_dispatches,
-                        ..k
+                std::iter::once(None)
+                    .chain(LEVEL_DISPATCH_STEPS.map(|step| {
+                        Some(
+                            default
+                                .saturating_add_signed(step)
+                                .min(MAX_LEVEL_DISPATCHES),
+                        )
+                    }))
+                    .map(|level_dispatches| {
+                        rounds(RoundSchedule {
+                            level_dispatches,
+                            ..k
+                        })
                     })
-                })
-                .to_vec()
+                    .collect()
             }
             Dimension::SortTile => std::iter::once(None)
                 .chain(SORT_TILE_ITEMS.map(Some))
