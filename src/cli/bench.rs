@@ -281,6 +281,9 @@ struct BenchRecord {
     /// The climbs' workgroup width in effect.
     climb_width: u32,
     adapter: String,
+    /// The adapter's device type (DiscreteGpu, IntegratedGpu, VirtualGpu, Cpu, Other): CPU
+    /// devices keep CPU defaults and do not tune by default.
+    device_type: String,
     triangles: usize,
     /// Triangle references in the leaves: the triangle count, plus the pieces of split
     /// triangles that ended up in different leaves (sbvh, trbvh-split).
@@ -569,6 +572,7 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
             sort_tile_items,
             climb_width: gpu.climb_width(),
             adapter: gpu.adapter_description(),
+            device_type: format!("{:?}", gpu.info.device_type),
             triangles: scene.triangles.len(),
             references: bvh.prim_indices.len(),
             nodes,
