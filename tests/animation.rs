@@ -331,6 +331,21 @@ fn animated_render_errors_are_clear() {
             "unknown scene",
         ),
         (&["render", "--frames", "0"][..], "--frames"),
+        (
+            &[
+                "render",
+                "--scene",
+                "flag",
+                "--frames",
+                "1",
+                "--builder",
+                "refit",
+                "--tune-schedule",
+                "on",
+            ][..],
+            "--tune-schedule on does not apply to refit: only GPU rebuilds",
+        ),
+        (&["render", "--tune-schedule", "on"][..], "--frames"),
         (&["render", "--json"][..], "--frames"),
     ] {
         common::assert_clean_failure(args, expected);

@@ -102,10 +102,14 @@ pub fn run(gpu: &GpuContext, args: &RenderArgs, frames: u32) -> Result<()> {
     let mut updater = TreeUpdater::new(gpu, mode, &params)?;
     updater.set_wide_collapse(args.trace.single_wide_collapse()?);
     updater.set_layout(gpu, layout);
-    let tune = args
-        .tune_schedule
-        .and_then(|t| t.forced())
-        .unwrap_or(gpu.info.device_type != wgpu::DeviceType::Cpu);
+    let forced = args.tune_schedule.and_then(|t| t.forced());
+    if forced == Some(true) && !updater.is_tunable() {
+        return Err(Error::InvalidArgument(format!(
+            "--tune-schedule on does not apply to {}: only GPU rebuilds have a build schedule",
+            mode.name()
+        )));
+    }
+    let tune = forced.unwrap_or(gpu.info.device_type != wgpu::DeviceType::Cpu);
     if tune {
         // The first frame's geometry, after half a second of builds (GPU clocks).
         if let Some(tuned) = tune_updater(
