@@ -161,8 +161,9 @@ for name in ("scaling.jsonl", "baseline.jsonl"):
             print(f"      tuned in {tuning['builds']} builds, {tuning['wall_ms']:.0f} ms: {tuning['kept']}"
                   f" (first comparison's default {first.get('kept_ms') or 0:.3f} ms,"
                   f" last kept {(kept[-1]['candidate_ms'] if kept else first.get('kept_ms')) or 0:.3f} ms)"
-                  + (" REFUSED: " + ", ".join(t["schedule"] for t in tuning["trials"] if t["other_tree"])
-                     if any(t["other_tree"] for t in tuning["trials"]) else ""))
+                  + (" REFUSED: " + ", ".join(t["schedule"] + (f" ({t['error']})" if t.get("error") else " (other tree)")
+                                              for t in tuning["trials"] if t["other_tree"] or t.get("error"))
+                     if any(t["other_tree"] or t.get("error") for t in tuning["trials"]) else ""))
 PY
 for f in probe variants layouts profile kernels schedules; do
   echo "--- $f (tail)"

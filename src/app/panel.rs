@@ -398,12 +398,16 @@ fn schedule(ui: &mut egui::Ui, info: &ScheduleInfo, actions: &mut PanelActions) 
             text += &format!(", {start:.2} ms to {kept:.2} ms");
         }
         ui.label(text);
-        let refused = tuned.trials.iter().filter(|t| t.other_tree).count();
-        if refused > 0 {
+        let other_tree = tuned.trials.iter().filter(|t| t.other_tree).count();
+        if other_tree > 0 {
             ui.colored_label(
                 ERROR_RED,
-                format!("{refused} schedules built another tree (a device bug; not used)"),
+                format!("{other_tree} schedules built another tree (a device bug; not used)"),
             );
+        }
+        let failed = tuned.trials.iter().filter(|t| t.error.is_some()).count();
+        if failed > 0 {
+            ui.label(format!("{failed} schedules failed to build (not used)"));
         }
     }
     let tune = ui.button("Tune schedule").on_hover_text(

@@ -128,11 +128,14 @@ pub trait ScheduleTrials {
 pub struct ScheduleTrial {
     pub candidate: BuildSchedule,
     /// Median builds, ms, of the kept schedule and of the candidate over the same pairs (None:
-    /// the candidate built another tree and was not timed).
+    /// the candidate was refused and not timed).
     pub kept_ms: Option<f64>,
     pub candidate_ms: Option<f64>,
-    /// The candidate built another tree than the starting schedule.
+    /// The candidate built another tree than the starting schedule (refused).
     pub other_tree: bool,
+    /// The candidate's build failed, with this error (refused; e.g. its scratch beyond the
+    /// device's limits).
+    pub error: Option<String>,
     /// The candidate became the kept schedule.
     pub adopted: bool,
 }
@@ -373,20 +376,27 @@ pub fn tune_schedule(
                     continue;
                 }
                 builds += 1;
-                if !trials.builds_reference_tree(candidate)? {
-                    log::warn!(
-                        "schedule [{}] built another tree than [{}]: a kernel or device bug, or \
+                let refusal = match trials.builds_reference_tree(candidate) {
+                    Ok(true) => None,
+                    Ok(false) => Some((
+                        true,
+                        None,
+                        "built another tree than the given schedule: a kernel or device bug, or \
                          for overlapped rounds a tree where the reach does not keep the rounds' \
-                         trees (README, \"Rounds can overlap\"); not used",
-                        candidate.label(),
-                        start.label()
-                    );
+                         trees (README, \"Rounds can overlap\")"
+                            .to_string(),
+                    )),
+                    Err(e) => Some((false, Some(e.to_string()), format!("failed: {e}"))),
+                };
+                if let Some((other_tree, error, why)) = refusal {
+                    log::warn!("schedule [{}] {why}; not used", candidate.label());
                     refused.push((dimension, candidate));
                     record.push(ScheduleTrial {
                         candidate,
                         kept_ms: None,
                         candidate_ms: None,
-                        other_tree: true,
+                        other_tree,
+                        error,
                         adopted: false,
                     });
                     continue;
@@ -412,6 +422,7 @@ pub fn tune_schedule(
                     kept_ms: Some(kept_ms),
                     candidate_ms: Some(candidate_ms),
                     other_tree: false,
+                    error: None,
                     adopted,
                 });
                 if adopted {
@@ -571,6 +582,10 @@ mod tests {
         for FakeTrials<C, O>
     {
         fn builds_reference_tree(&mut self, schedule: BuildSchedule) -> Result<bool> {
+            // 23 wide level dispatches stand for a schedule beyond the device's limits.
+            if schedule.wide_level_dispatches == Some(23) {
+                return Err(Error::InvalidArgument("beyond the device's limits".into()));
+            }
             Ok(!(self.other_tree)(schedule))
         }
 
@@ -718,7 +733,7 @@ mod tests {
     }
 
     #[test]
-    fn a_schedule_with_another_tree_is_never_timed_or_kept() {
+    fn a_schedule_with_another_tree_or_a_failed_build_is_never_timed_or_kept() {
         let (tuned, timed) = tune(
             |s| s.rounds.overlap.is_some(),
             SchedulePins::default(),
@@ -730,6 +745,13 @@ mod tests {
         let refused: Vec<_> = tuned.trials.iter().filter(|t| t.other_tree).collect();
         assert_eq!(refused.len(), 1, "refused once, not retried");
         assert!(refused[0].candidate_ms.is_none() && !refused[0].adopted);
+        assert!(refused[0].error.is_none());
+        // A candidate whose build fails is refused the same way, and the tuning goes on.
+        let failed: Vec<_> = tuned.trials.iter().filter(|t| t.error.is_some()).collect();
+        assert_eq!(failed.len(), 1, "{failed:?}");
+        assert_eq!(failed[0].candidate.wide_level_dispatches, Some(23));
+        assert!(!failed[0].other_tree && failed[0].candidate_ms.is_none());
+        assert!(timed.iter().all(|s| s.wide_level_dispatches != Some(23)));
         // The other dimensions still won.
         assert_eq!(tuned.schedule.rounds.team_below(), 16);
     }

@@ -352,13 +352,15 @@ struct TuningRecord {
 
 /// A trial of a tuning: the candidate schedule (as in run labels), the median builds of the
 /// schedule kept at the time and of the candidate over the same pairs (null: not timed), whether
-/// it built another tree (refused) and whether it was kept.
+/// it built another tree or its build failed (refused: `other_tree`, `error`) and whether it was
+/// kept.
 #[derive(Serialize)]
 struct TrialRecord {
     schedule: String,
     kept_ms: Option<f64>,
     candidate_ms: Option<f64>,
     other_tree: bool,
+    error: Option<String>,
     adopted: bool,
 }
 
@@ -376,6 +378,7 @@ impl From<&TunedSchedule> for TuningRecord {
                     kept_ms: t.kept_ms,
                     candidate_ms: t.candidate_ms,
                     other_tree: t.other_tree,
+                    error: t.error.clone(),
                     adopted: t.adopted,
                 })
                 .collect(),
