@@ -8,7 +8,8 @@
 //! is first built once (compiling its kernels) and refused unless its tree is the starting
 //! schedule's (on a device where it is not, a schedule has a bug: the tuner logs it and never
 //! keeps it), then timed in alternation with the schedule kept so far (pairs of builds, so that a
-//! change of clocks hits both) and kept when its median build is shorter by a margin.
+//! change of clocks hits both) and kept when it is faster pair by pair: by a margin in the median
+//! ratio, and in four pairs of five.
 //! `DeviceTrials` runs the trials on the GPU through a `TreeUpdater`. Not from the paper, whose
 //! schedule is one (§4): the README's "Schedule tuning" says what it varies and why.
 
@@ -95,8 +96,9 @@ pub struct SchedulePins {
 pub struct TuningOptions {
     /// Builds of each of the two schedules of a comparison (alternating), at least 1.
     pub pairs: u32,
-    /// An alternative is kept when its median build is shorter than the kept schedule's by at
-    /// least this fraction (the measurements' noise on a warm GPU is about 1 %).
+    /// An alternative is kept when its builds are shorter than the kept schedule's by at least
+    /// this fraction, as the median of the pairs' ratios, and in four pairs of five (`faster`;
+    /// the measurements' noise on a warm GPU is about 1 %).
     pub min_gain: f64,
     /// Descents over all free dimensions at most; a descent that keeps nothing ends the tuning.
     pub max_descents: u32,
@@ -334,6 +336,19 @@ fn without_defaults(schedule: BuildSchedule, space: &TuningSpace) -> BuildSchedu
     }
 }
 
+/// Whether the candidate's builds beat the kept schedule's, pair by pair (each pair ran back to
+/// back, so a change of clocks or load hits both): the median of the pairs' time ratios is below
+/// 1 − `min_gain`, and the candidate was faster in at least four pairs of five.
+fn faster(kept: &[f64], candidate: &[f64], min_gain: f64) -> bool {
+    let ratios: Vec<f64> = kept
+        .iter()
+        .zip(candidate)
+        .map(|(k, c)| c / k.max(f64::MIN_POSITIVE))
+        .collect();
+    let wins = ratios.iter().filter(|&&r| r < 1.0).count();
+    median(ratios.clone()) < 1.0 - min_gain && 5 * wins >= 4 * ratios.len()
+}
+
 fn median(mut values: Vec<f64>) -> f64 {
     values.sort_by(f64::total_cmp);
     values[values.len() / 2]
@@ -408,9 +423,9 @@ pub fn tune_schedule(
                     builds += 2;
                 }
                 compared.push((kept, candidate));
+                let adopted = faster(&kept_times, &candidate_times, options.min_gain);
                 let kept_ms = median(kept_times);
                 let candidate_ms = median(candidate_times);
-                let adopted = candidate_ms < kept_ms * (1.0 - options.min_gain);
                 log::info!(
                     "schedule tuning: [{}] {candidate_ms:.3} ms against [{}] {kept_ms:.3} ms{}",
                     candidate.label(),
@@ -754,6 +769,24 @@ mod tests {
         assert!(timed.iter().all(|s| s.wide_level_dispatches != Some(23)));
         // The other dimensions still won.
         assert_eq!(tuned.schedule.rounds.team_below(), 16);
+    }
+
+    #[test]
+    fn a_candidate_must_win_the_pairs_not_one_lucky_build() {
+        // Faster by 10 % in three pairs of five, slower in two: not kept (a noisy device).
+        let kept = [10.0, 10.0, 10.0, 10.0, 10.0];
+        assert!(!faster(&kept, &[9.0, 9.0, 9.0, 11.0, 12.0], 0.02));
+        // Four of five and a median ratio of 0.9: kept, whatever the outlier.
+        assert!(faster(&kept, &[9.0, 9.0, 9.0, 9.0, 30.0], 0.02));
+        // All pairs, but by less than the margin: not kept.
+        assert!(!faster(&kept, &[9.9; 5], 0.02));
+        // A clock change in the middle hits both sides of its pairs.
+        assert!(faster(
+            &[10.0, 10.0, 5.0, 5.0, 5.0],
+            &[9.0, 9.0, 4.5, 4.5, 4.5],
+            0.02
+        ));
+        assert!(faster(&[10.0], &[9.0], 0.02));
     }
 
     #[test]
