@@ -8,7 +8,7 @@
 // before this wave's treelets are optimized, as they change neither a root's parent link nor any
 // level (no root of a wave is an ancestor of another), and by the workgroup's last invocations,
 // so that in a wave of few treelets a team without one finds it while the others optimize.
-// A wave of fewer than min(params.team_below, TEAM_WAVE) treelets is optimized by the workgroup's
+// A wave of few treelets (treelet_team.wgsl's climb_wave_by_teams) is optimized by the workgroup's
 // TEAMS teams of 32 invocations, a treelet per team at a time (treelet_team.wgsl: the waves near
 // the top hold one to a few treelets); a larger wave one treelet per invocation (treelet_dp.wgsl).
 // Node data is only shared within the workgroup: storageBarriers order it.
@@ -17,9 +17,6 @@
 
 const WORKGROUP: u32 = 128u;
 const TEAMS: u32 = 4u;
-// From this many treelets on, a wave takes longer by teams (a treelet per team at a time) than
-// with a treelet per invocation.
-const TEAM_WAVE: u32 = 32u;
 
 @group(0) @binding(0) var<uniform> params: RoundParams;
 @group(0) @binding(1) var<storage, read_write> nodes: array<BvhNode>;
@@ -82,7 +79,7 @@ fn main(@builtin(local_invocation_index) lid: u32) {
                 }
             }
         }
-        if size < min(params.team_below, TEAM_WAVE) {
+        if climb_wave_by_teams(size) {
             let team = lid / TEAM_LANES;
             for (var done = 0u; done < size; done += TEAMS) {
                 let i = done + team;

@@ -2,7 +2,7 @@
 // workgroup: the waves near the end hold few treelets, where a dispatch each would mostly cost
 // its launch. Each wave: the candidates sorted (step 1), a barrier, the treelets optimized
 // (step 2), a barrier; it ends with the first wave that has no treelet (none is left then: the
-// CPU twin ends likewise). A wave of fewer than min(params.team_below, TEAM_WAVE) treelets is
+// CPU twin ends likewise). A wave of few treelets (treelet_team.wgsl's climb_wave_by_teams) is
 // optimized by the workgroup's TEAMS teams of 32 invocations, a treelet per team at a time
 // (treelet_team.wgsl), as in treelets_climb.wgsl; a larger one a treelet per invocation. Node
 // data is only shared within the workgroup: storageBarriers order it.
@@ -11,8 +11,6 @@
 
 const WORKGROUP: u32 = 128u;
 const TEAMS: u32 = 4u;
-// From this many treelets on, a wave takes longer by teams than a treelet per invocation.
-const TEAM_WAVE: u32 = 32u;
 
 @group(0) @binding(0) var<uniform> params: RoundParams;
 @group(0) @binding(1) var<storage, read_write> nodes: array<BvhNode>;
@@ -51,7 +49,7 @@ fn main(@builtin(local_invocation_index) lid: u32) {
         if treelets == 0u {
             break;
         }
-        if treelets < min(params.team_below, TEAM_WAVE) {
+        if climb_wave_by_teams(treelets) {
             let team = lid / TEAM_LANES;
             let lane = lid % TEAM_LANES;
             for (var done = 0u; done < treelets; done += TEAMS) {

@@ -42,6 +42,15 @@ var<workgroup> team_split: array<u32, TEAMS * TEAM_SUBSETS>;
 var<workgroup> team_best_cost: array<f32, TEAMS * TEAM_LANES>;
 var<workgroup> team_best_split: array<u32, TEAMS * TEAM_LANES>;
 
+// A climb's wave (treelets_climb.wgsl, waves_climb.wgsl: TEAMS teams, a treelet per team at a
+// time) goes to the teams below this many treelets and below the team threshold: from TEAM_WAVE
+// treelets on, it takes longer by teams than with a treelet per invocation.
+const TEAM_WAVE: u32 = 32u;
+
+fn climb_wave_by_teams(treelets: u32) -> bool {
+    return treelets < min(params.team_below, TEAM_WAVE);
+}
+
 // C(n, k) for n <= 8 (exact: each step's product is divisible).
 fn binomial(n: u32, k: u32) -> u32 {
     var c = 1u;

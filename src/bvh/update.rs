@@ -212,13 +212,11 @@ impl TreeUpdater {
     pub fn set_build_schedule(&mut self, schedule: BuildSchedule) -> Result<()> {
         match &mut self.producer {
             Producer::Lbvh(b) => b.set_sort_tile_items(schedule.sort_tile_items)?,
-            Producer::Trbvh(b) => {
-                b.set_sort_tile_items(schedule.sort_tile_items)?;
-                b.set_schedule(schedule.rounds);
-            }
+            Producer::Trbvh(b) => b.set_sort_tile_items(schedule.sort_tile_items)?,
             Producer::Cpu(_) => {}
         }
         self.sort_tile_items = schedule.sort_tile_items;
+        self.set_round_schedule(schedule.rounds);
         self.set_wide_options(WideOptions {
             level_dispatches: schedule.wide_level_dispatches,
             ..self.wide

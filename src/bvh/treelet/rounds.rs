@@ -382,7 +382,6 @@ impl TreeletRounds {
             return;
         }
         let roots = self.roots();
-        // (the rest of the round follows record_levels below)
         let optimize = self
             .optimize
             .get(ctx, round.treelet_size, self.schedule.dp());
