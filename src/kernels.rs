@@ -29,6 +29,7 @@ pub const ALL: &[&KernelInfo] = &[
     &bvh::presplit::TRIANGLES_SPLIT.info,
     &bvh::presplit::REFERENCES_SPLIT.info,
     &bvh::NODES_REFIT.info,
+    &bvh::WORDS_HASH.info,
     &trace::PATHS_TRACE.info,
     &trace::IMAGE_TONEMAP.info,
     &trace::RAYS_INTERSECT.info,

@@ -22,7 +22,7 @@ use treelet::bvh::wide::{
 };
 use treelet::bvh::{
     build_sweep_sah, read_wide_bvh, validate, write_wide_bvh, Builder, Bvh, BvhNode, SahParams,
-    TreeUpdater, UpdateMode, ValidationError, DEFAULT_SPLIT_PERCENT,
+    TreeFingerprint, TreeUpdater, UpdateMode, ValidationError, WordsHasher, DEFAULT_SPLIT_PERCENT,
 };
 use treelet::device::{Geometry, Tree, WideTree};
 use treelet::geometry::{Aabb, Hit, Ray};
@@ -557,4 +557,77 @@ fn both_layouts_trace_the_same_paths_on_a_deep_scene() {
         mean_off <= 0.01,
         "mean brightness: binary {binary_mean}, wide {wide_mean}"
     );
+}
+
+/// `wide` with its nodes and reference blocks numbered depth first (the conversion numbers them
+/// level by level): the same tree, other `child_base` and `prim_base` words.
+fn renumbered_depth_first(wide: &WideBvh) -> WideBvh {
+    let mut nodes = vec![wide.nodes[0]; wide.nodes.len()];
+    let mut prim_indices = Vec::with_capacity(wide.prim_indices.len());
+    let mut next = 1u32;
+    let mut stack = vec![(0u32, 0u32)];
+    while let Some((old, new)) = stack.pop() {
+        let mut node = wide.nodes[old as usize];
+        let internal = (node.exponents >> 24).count_ones();
+        let references: u32 = (0..WIDTH)
+            .map(|slot| match node.slot(slot) {
+                Slot::Leaf { count, .. } => count,
+                _ => 0,
+            })
+            .sum();
+        let first = node.prim_base as usize;
+        node.prim_base = prim_indices.len() as u32;
+        prim_indices.extend_from_slice(&wide.prim_indices[first..first + references as usize]);
+        let old_base = node.child_base;
+        node.child_base = next;
+        next += internal;
+        nodes[new as usize] = node;
+        for k in (0..internal).rev() {
+            stack.push((old_base + k, node.child_base + k));
+        }
+    }
+    WideBvh {
+        nodes,
+        prim_indices,
+    }
+}
+
+/// The tuning's tree fingerprint, hashed on the GPU, equals its CPU twin over the trees read back;
+/// every level schedule of the conversion gives it; the wide layout's does not depend on how its
+/// nodes and references are numbered; another tree has another one.
+#[test]
+fn the_gpu_fingerprint_equals_the_cpu_twin_and_ignores_wide_numbering() {
+    let scene = load_scene("field-10k").unwrap();
+    let builder = Builder::Trbvh(TreeletSettings::BALANCED);
+    let mut hasher = WordsHasher::new(gpu()).unwrap();
+    let (_, mut tree) = build_wide(&scene, builder, WideCollapse::Greedy, None);
+    let fingerprint = TreeFingerprint::of(gpu(), &mut hasher, &tree).unwrap();
+    let binary = tree.download(gpu()).unwrap();
+    let wide = tree.wide.as_ref().unwrap().download(gpu()).unwrap();
+    assert_eq!(
+        fingerprint,
+        TreeFingerprint::of_cpu(&binary, Some(&wide)),
+        "GPU hash against the CPU twin"
+    );
+    for dispatches in [0, 1, 3] {
+        let (_, other) = build_wide(&scene, builder, WideCollapse::Greedy, Some(dispatches));
+        assert_eq!(
+            TreeFingerprint::of(gpu(), &mut hasher, &other).unwrap(),
+            fingerprint,
+            "{dispatches} level dispatches"
+        );
+    }
+    let renumbered = renumbered_depth_first(&wide);
+    validate_wide(&renumbered, &scene.triangles).unwrap();
+    assert!(renumbered.nodes != wide.nodes && renumbered.prim_indices != wide.prim_indices);
+    tree.wide = Some(WideTree::upload(gpu(), &renumbered).unwrap());
+    assert_eq!(
+        TreeFingerprint::of(gpu(), &mut hasher, &tree).unwrap(),
+        fingerprint,
+        "renumbered depth first"
+    );
+    let (_, lbvh) = build_wide(&scene, Builder::Lbvh, WideCollapse::Greedy, None);
+    let lbvh_fingerprint = TreeFingerprint::of(gpu(), &mut hasher, &lbvh).unwrap();
+    assert_ne!(lbvh_fingerprint.binary, fingerprint.binary);
+    assert_ne!(lbvh_fingerprint.wide, fingerprint.wide);
 }

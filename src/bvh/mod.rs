@@ -3,6 +3,7 @@
 
 mod builder;
 mod export;
+mod fingerprint;
 pub mod lbvh;
 mod node;
 mod nodes_refit;
@@ -20,6 +21,7 @@ pub mod wide;
 
 pub use builder::{BuildReport, Builder, DEFAULT_SPLIT_PERCENT};
 pub use export::{read_bvh, read_wide_bvh, write_bvh, write_wide_bvh, BVH_MAGIC, WIDE_BVH_MAGIC};
+pub use fingerprint::{words_hash_cpu, TreeFingerprint, WordsHash, WordsHasher, WORDS_HASH};
 pub use node::{Bvh, BvhNode, LEAF_FLAG};
 pub use nodes_refit::{derive_refit_links, parents_and_leaves, NodesRefit, NODES_REFIT};
 pub use sah::{sah_cost, SahParams};

@@ -15,9 +15,10 @@
 
 use std::time::Instant;
 
+use super::fingerprint::{TreeFingerprint, WordsHasher};
 use super::treelet::{RoundSchedule, TreeletDp, MAX_LEVEL_DISPATCHES, OVERLAP_REACH};
 use super::wide::MAX_WIDE_LEVEL_DISPATCHES;
-use super::{Bvh, TreeUpdater};
+use super::TreeUpdater;
 use crate::device::{Geometry, Tree};
 use crate::gpu::{GpuContext, GpuTimer, ParamSlab, Recorder};
 use crate::scene::Triangle;
@@ -489,31 +490,6 @@ pub fn tune_updater(
     tuned.map(Some)
 }
 
-/// What a trial's tree is compared by: the binary tree bit for bit, and of its wide layout (whose
-/// conversion numbers wide nodes by atomics, so that two conversions of one tree may order them
-/// differently) the counts of nodes and leaves and the depth.
-#[derive(Clone, Debug, Default, PartialEq)]
-struct TreeFingerprint {
-    binary: Bvh,
-    wide: Option<(usize, usize, usize)>,
-}
-
-impl TreeFingerprint {
-    fn of(ctx: &GpuContext, tree: &Tree) -> Result<Self> {
-        let wide = match &tree.wide {
-            Some(wide) => {
-                let wide = wide.download(ctx)?;
-                Some((wide.nodes.len(), wide.leaf_count(), wide.levels()))
-            }
-            None => None,
-        };
-        Ok(Self {
-            binary: tree.download(ctx)?,
-            wide,
-        })
-    }
-}
-
 /// Trials on the GPU: builds of `geometry` through `updater` (a GPU builder's, not a refit's)
 /// into `tree`, the starting schedule's tree read back once as the reference.
 pub struct DeviceTrials<'a> {
@@ -523,6 +499,7 @@ pub struct DeviceTrials<'a> {
     triangles: &'a [Triangle],
     tree: &'a mut Tree,
     slab: ParamSlab,
+    hasher: WordsHasher,
     reference: TreeFingerprint,
 }
 
@@ -543,10 +520,11 @@ impl<'a> DeviceTrials<'a> {
             triangles,
             tree,
             slab: ParamSlab::new(ctx),
+            hasher: WordsHasher::new(ctx)?,
             reference: TreeFingerprint::default(),
         };
         trials.build(start, None)?;
-        trials.reference = TreeFingerprint::of(ctx, trials.tree)?;
+        trials.reference = TreeFingerprint::of(ctx, &mut trials.hasher, trials.tree)?;
         Ok(trials)
     }
 
@@ -564,7 +542,7 @@ impl<'a> DeviceTrials<'a> {
 impl ScheduleTrials for DeviceTrials<'_> {
     fn builds_reference_tree(&mut self, schedule: BuildSchedule) -> Result<bool> {
         self.build(schedule, None)?;
-        Ok(TreeFingerprint::of(self.ctx, self.tree)? == self.reference)
+        Ok(TreeFingerprint::of(self.ctx, &mut self.hasher, self.tree)? == self.reference)
     }
 
     fn time_build(&mut self, schedule: BuildSchedule) -> Result<f64> {
