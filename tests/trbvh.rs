@@ -18,7 +18,7 @@ use treelet::bvh::treelet::{
 use treelet::bvh::wide::{validate_wide_with_references, Layout, WideOptions};
 use treelet::bvh::{
     sah_cost, validate, validate_with_references, BuildSchedule, Builder, Bvh, SahParams,
-    TuningOptions,
+    TreeUpdater, TuningOptions, UpdateMode,
 };
 use treelet::device::{Geometry, Tree};
 use treelet::gpu::{GpuContext, Timing};
@@ -785,6 +785,48 @@ fn a_tuned_schedule_builds_the_untuned_tree() {
         .download(gpu())
         .unwrap();
     validate_wide_with_references(&wide, &scene.triangles).unwrap();
+}
+
+/// The tuning starts from the defaults the builds take: with pre-splitting those of the
+/// references there can be (30 % more than the triangles), not of the triangles.
+#[test]
+fn the_tuning_space_has_the_builds_defaults() {
+    let device = gpu().info.device_type;
+    // 110,000 triangles and 143,000 references: other defaults on GPUs (log2 16 and 17) and on
+    // CPU devices (levels of more than 128 treelets of 7 leaves: 6 and 7).
+    let triangles = 110_000;
+    for (split_percent, leaves) in [(0, triangles), (30, 143_000)] {
+        let settings = TreeletSettings {
+            split_percent,
+            ..TreeletSettings::BALANCED
+        };
+        let builder = if split_percent == 0 {
+            Builder::Trbvh(settings)
+        } else {
+            Builder::TrbvhSplit(settings)
+        };
+        let mut updater =
+            TreeUpdater::new(gpu(), UpdateMode::Rebuild(builder), &SahParams::default()).unwrap();
+        updater.set_layout(gpu(), Layout::Wide);
+        let space = updater.tuning_space(gpu(), triangles).unwrap();
+        assert_eq!(
+            space.round_levels,
+            Some(RoundSchedule::default_level_dispatches(leaves, 7, device)),
+            "{}",
+            builder.label()
+        );
+        assert_eq!(
+            space.wide_levels,
+            Some(treelet::bvh::wide::WideConverter::level_dispatches(
+                leaves, device
+            ))
+        );
+    }
+    assert_ne!(
+        RoundSchedule::default_level_dispatches(triangles, 7, device),
+        RoundSchedule::default_level_dispatches(143_000, 7, device),
+        "the counts must give other defaults, or the test shows nothing"
+    );
 }
 
 #[test]

@@ -241,13 +241,19 @@ impl TreeUpdater {
         !matches!(self.producer, Producer::Cpu(_)) && !self.mode.is_refit()
     }
 
-    /// What a schedule tuning (`tune_schedule`) may vary in this updater's builds of `prims`
-    /// primitives, with the device's defaults (None where `is_tunable` is false).
-    pub fn tuning_space(&self, ctx: &GpuContext, prims: u32) -> Option<TuningSpace> {
+    /// What a schedule tuning (`tune_schedule`) may vary in this updater's builds over
+    /// `triangles` triangles, with the defaults those builds take on this device (None where
+    /// `is_tunable` is false).
+    pub fn tuning_space(&self, ctx: &GpuContext, triangles: u32) -> Option<TuningSpace> {
         if !self.is_tunable() {
             return None;
         }
         let device = ctx.info.device_type;
+        // The stages' sizes: the references of pre-splitting where the builder splits.
+        let prims = match &self.producer {
+            Producer::Trbvh(b) => b.leaf_capacity(triangles),
+            _ => triangles,
+        };
         let round_levels = match &self.producer {
             Producer::Trbvh(b) => Some(RoundSchedule::default_level_dispatches(
                 prims,

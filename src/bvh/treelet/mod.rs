@@ -307,6 +307,17 @@ impl TrbvhBuilder {
         self.lbvh.set_sort_tile_items(items)
     }
 
+    /// The leaves of a build over `triangles` triangles, as the build sizes its stages: the
+    /// triangles, or with pre-splitting the references there can be.
+    pub fn leaf_capacity(&self, triangles: u32) -> u32 {
+        let budget = split_budget(triangles, self.settings.split_percent);
+        if budget == 0 {
+            triangles
+        } else {
+            PreSplitter::capacity(triangles, budget)
+        }
+    }
+
     /// Timestamped passes one build records (at most: each round two).
     pub fn pass_count(&self) -> u32 {
         LBVH_PASSES + 3 + 2 * self.settings.gammas().len() as u32
@@ -403,11 +414,7 @@ impl TrbvhBuilder {
         let ctx = rec.ctx;
         let budget = split_budget(geometry.triangle_count, self.settings.split_percent);
         // The leaves: the triangles, or the references of pre-splitting (counted on the GPU).
-        let n = if budget == 0 {
-            geometry.triangle_count
-        } else {
-            PreSplitter::capacity(geometry.triangle_count, budget)
-        };
+        let n = self.leaf_capacity(geometry.triangle_count);
         let scratch = self.reserve(ctx, n)?;
         let (nodes, order) = (scratch.nodes.clone(), scratch.order.clone());
         let split_total = if budget == 0 {
