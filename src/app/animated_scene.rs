@@ -11,7 +11,7 @@ use super::sah_history::{SahHistory, SahSample};
 use super::stats::BuildTiming;
 use super::tree_snapshot::{SnapshotCost, TreeSnapshot};
 use crate::anim::{AnimateStage, Animation};
-use crate::bvh::{SahParams, UpdateMode};
+use crate::bvh::{BuildSchedule, SahParams, UpdateMode};
 use crate::device::{Geometry, Tree};
 use crate::gpu::{Recorder, StageTime};
 use crate::scene::Camera;
@@ -116,11 +116,13 @@ impl AnimatedScene {
 
     /// After the traced tree was updated by `traced_mode` in `rec`: records the companion
     /// tree's update and copies of both trees, for the plot (`poll`). Skipped while the previous
-    /// frame's copies are still in flight.
+    /// frame's copies are still in flight. A new companion's rebuilds take `schedule` (the one
+    /// its builder kept at a tuning) where given.
     pub fn record_comparison(
         &mut self,
         rec: &mut Recorder<'_>,
         traced_mode: UpdateMode,
+        schedule: Option<BuildSchedule>,
         geometry: &Geometry,
         traced: &Tree,
         params: &SahParams,
@@ -133,7 +135,11 @@ impl AnimatedScene {
             return Ok(());
         }
         if self.companion.as_ref().is_none_or(|c| c.mode() != mode) {
-            self.companion = Some(Companion::new(rec.ctx, mode, params)?);
+            let mut companion = Companion::new(rec.ctx, mode, params)?;
+            if let Some(schedule) = schedule {
+                companion.set_build_schedule(schedule)?;
+            }
+            self.companion = Some(companion);
             let (rebuild, refit) = if traced_mode.is_refit() {
                 (mode, traced_mode)
             } else {

@@ -4,7 +4,7 @@
 //! rebuild. Both trees are built over the same geometry, in the same frame's recording; the
 //! companion is never traced.
 
-use crate::bvh::{SahParams, TreeUpdater, UpdateMode};
+use crate::bvh::{BuildSchedule, SahParams, TreeUpdater, UpdateMode};
 use crate::device::{Geometry, Tree};
 use crate::gpu::{GpuContext, Recorder};
 use crate::scene::Triangle;
@@ -36,6 +36,11 @@ impl Companion {
 
     pub fn mode(&self) -> UpdateMode {
         self.updater.mode()
+    }
+
+    /// How the companion's rebuilds spread over the device (see `TreeUpdater::set_build_schedule`).
+    pub fn set_build_schedule(&mut self, schedule: BuildSchedule) -> Result<()> {
+        self.updater.set_build_schedule(schedule)
     }
 
     /// Records the rebuild or refit of the companion tree to the current triangles.

@@ -23,13 +23,16 @@
 //! On a GPU the build schedule of a GPU builder's rebuilds is tuned once its updater has run
 //! `AUTO_TUNE_FRAMES` frames (the clocks are up by then; `bvh::tune_updater`, which waits for its
 //! builds: about a hundred of them, a second or less), at once where `--tune-schedule on` asks, and again on the
-//! panel's request; every schedule builds the same tree, so only the build times change.
+//! panel's request; every schedule builds the same tree, so only the build times change. The
+//! schedule a builder kept is used again by later updaters of its rebuilds (a switch back to the
+//! builder, the companion rebuild beside a traced refit) without another tuning.
 
 use std::sync::Arc;
 use std::time::Instant;
 
 use super::animated_scene::AnimatedScene;
 use super::camera_control::CameraInput;
+use super::companion::Companion;
 use super::display::PixelRect;
 use super::frame_readback::{FrameReadback, FrameRecord, FrameResult};
 use super::options::{default_update_mode, ViewerOptions};
@@ -44,7 +47,9 @@ use super::tradeoff_panel::{StudyScene, TradeoffPanel};
 use super::tree_snapshot::TreeSnapshot;
 use crate::anim::{is_animation, load_animation};
 use crate::bvh::wide::Layout;
-use crate::bvh::{tune_updater, Builder, TreeUpdater, TunedSchedule, TuningOptions, UpdateMode};
+use crate::bvh::{
+    tune_updater, BuildSchedule, Builder, TreeUpdater, TunedSchedule, TuningOptions, UpdateMode,
+};
 use crate::device::{Geometry, Tree};
 use crate::gpu::{GpuContext, ParamSlab, Recorder};
 use crate::scene::{load_scene, Camera, Scene};
@@ -105,6 +110,9 @@ pub struct Viewer {
     sah_pending: bool,
     /// The last schedule tuning of the current updater and the scene it ran on.
     tuned: Option<(TunedSchedule, String)>,
+    /// The schedule each GPU builder kept at its last tuning: a new updater of that builder's
+    /// rebuilds (the traced one, or the companion of a traced refit) starts from it.
+    kept_schedules: Vec<(Builder, BuildSchedule)>,
     /// The frame at which the current updater's schedule is tuned (None: done, or not asked).
     auto_tune_at: Option<u64>,
     /// `ViewerOptions::tune_schedule`.
@@ -156,6 +164,7 @@ impl Viewer {
             sah_snapshot: None,
             sah_pending: false,
             tuned: None,
+            kept_schedules: Vec::new(),
             auto_tune_at: None,
             tune_option: options.tune_schedule,
         };
@@ -401,6 +410,8 @@ impl Viewer {
     /// Animated scenes with the comparison on: after the traced tree was updated, records the
     /// second tree's update and copies of both trees for the SAH plot.
     fn compare(&mut self, rec: &mut Recorder<'_>) -> std::result::Result<(), String> {
+        let companion_schedule =
+            Companion::mode_for(self.applied.builder).and_then(|mode| self.kept_schedule(mode));
         let Some(animated) = self.animated.as_mut() else {
             return Ok(());
         };
@@ -416,6 +427,7 @@ impl Viewer {
         let recorded = animated.record_comparison(
             rec,
             self.applied.builder,
+            companion_schedule,
             &self.geometry,
             &self.tree,
             &params,
@@ -585,6 +597,17 @@ impl Viewer {
     /// `AUTO_TUNE_FRAMES` frames on a GPU by default.
     fn new_updater(&mut self, ctx: &GpuContext) {
         self.tuned = None;
+        if let Some(schedule) = self.kept_schedule(self.updater.mode()) {
+            match self.updater.set_build_schedule(schedule) {
+                // Tuned before on this device: no tuning again unless asked.
+                Ok(()) if self.tune_option != Some(true) => {
+                    self.auto_tune_at = None;
+                    return;
+                }
+                Ok(()) => {}
+                Err(e) => self.error = Some(format!("cannot use the tuned schedule: {e}")),
+            }
+        }
         let gpu = ctx.info.device_type != wgpu::DeviceType::Cpu;
         let delay = match self.tune_option {
             Some(true) => Some(0),
@@ -617,6 +640,10 @@ impl Viewer {
                     tuned.builds,
                     tuned.wall_ms
                 );
+                if let UpdateMode::Rebuild(builder) = self.updater.mode() {
+                    self.kept_schedules.retain(|(b, _)| *b != builder);
+                    self.kept_schedules.push((builder, tuned.schedule));
+                }
                 self.tuned = Some((tuned, self.scene.name.clone()));
             }
             Ok(None) => {}
@@ -624,6 +651,17 @@ impl Viewer {
         }
         // The tuning's builds left the same tree; the next frame builds it as usual.
         self.tree_dirty = true;
+    }
+
+    /// The schedule kept for `mode`'s builder at its last tuning, for rebuilds.
+    fn kept_schedule(&self, mode: UpdateMode) -> Option<BuildSchedule> {
+        let UpdateMode::Rebuild(builder) = mode else {
+            return None;
+        };
+        self.kept_schedules
+            .iter()
+            .find(|(b, _)| *b == builder)
+            .map(|&(_, schedule)| schedule)
     }
 
     fn request_reference(&mut self) {
