@@ -11,7 +11,7 @@ use super::sah_history::{SahHistory, SahSample};
 use super::stats::BuildTiming;
 use super::tree_snapshot::{SnapshotCost, TreeSnapshot};
 use crate::anim::{AnimateStage, Animation};
-use crate::bvh::{BuildSchedule, SahParams, UpdateMode};
+use crate::bvh::{BuildSchedule, SahParams, TreeUpdater, UpdateMode};
 use crate::device::{Geometry, Tree};
 use crate::gpu::{Recorder, StageTime};
 use crate::scene::Camera;
@@ -112,6 +112,17 @@ impl AnimatedScene {
             looped,
             cpu_time,
         })
+    }
+
+    /// The companion's updater and tree where it rebuilds with a GPU builder (a traced refit's
+    /// comparison), for a schedule tuning.
+    pub fn tunable_companion(&mut self) -> Option<(&mut TreeUpdater, &mut Tree)> {
+        self.companion.as_mut().and_then(Companion::tunable)
+    }
+
+    /// The build schedule of the companion's GPU rebuilds, where it has them.
+    pub fn companion_schedule(&self) -> Option<BuildSchedule> {
+        self.companion.as_ref().and_then(Companion::build_schedule)
     }
 
     /// After the traced tree was updated by `traced_mode` in `rec`: records the companion

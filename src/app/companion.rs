@@ -43,6 +43,21 @@ impl Companion {
         self.updater.set_build_schedule(schedule)
     }
 
+    /// The updater and tree of a companion that rebuilds with a GPU builder (beside a traced
+    /// refit), for a schedule tuning; None for a refit companion.
+    pub fn tunable(&mut self) -> Option<(&mut TreeUpdater, &mut Tree)> {
+        self.updater
+            .is_tunable()
+            .then_some((&mut self.updater, &mut self.tree))
+    }
+
+    /// The build schedule of a companion's GPU rebuilds (None for a refit companion).
+    pub fn build_schedule(&self) -> Option<BuildSchedule> {
+        self.updater
+            .is_tunable()
+            .then(|| self.updater.build_schedule())
+    }
+
     /// Records the rebuild or refit of the companion tree to the current triangles.
     pub fn record(
         &mut self,

@@ -49,13 +49,16 @@ pub struct PanelInfo<'a> {
     pub screenshot: Option<&'a str>,
     /// The animation of an animated scene.
     pub animation: Option<AnimationInfo<'a>>,
-    /// A GPU builder's build schedule (None for CPU builders and refits).
+    /// A GPU builder's build schedule: the traced tree's rebuilds, or beside a traced refit the
+    /// comparison's rebuilds (None for CPU builders, and refits without that comparison).
     pub schedule: Option<ScheduleInfo<'a>>,
 }
 
 /// The build schedule in use, and the last tuning with the scene it ran on.
 pub struct ScheduleInfo<'a> {
     pub current: BuildSchedule,
+    /// The schedule is the comparison's rebuilds' (the traced tree is a refit).
+    pub of_comparison: bool,
     pub tuned: Option<(&'a TunedSchedule, &'a str)>,
 }
 
@@ -379,7 +382,12 @@ fn bvh(
 
 /// The build schedule, its last tuning and the button that tunes it.
 fn schedule(ui: &mut egui::Ui, info: &ScheduleInfo, actions: &mut PanelActions) {
-    ui.label(format!("schedule: {}", info.current.label()));
+    let whose = if info.of_comparison {
+        "comparison rebuild's schedule"
+    } else {
+        "schedule"
+    };
+    ui.label(format!("{whose}: {}", info.current.label()));
     if let Some((tuned, scene)) = info.tuned {
         let start_ms = tuned.trials.first().and_then(|t| t.kept_ms);
         let kept_ms = tuned

@@ -25,7 +25,8 @@
 //! builds: about a hundred of them, a second or less), at once where `--tune-schedule on` asks, and again on the
 //! panel's request; every schedule builds the same tree, so only the build times change. The
 //! schedule a builder kept is used again by later updaters of its rebuilds (a switch back to the
-//! builder, the companion rebuild beside a traced refit) without another tuning.
+//! builder, the companion rebuild beside a traced refit) without another tuning. Beside a traced
+//! refit the tuning times the companion's rebuilds, the only ones in view.
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -202,10 +203,7 @@ impl Viewer {
             reference: self.reference.state(),
             error: self.error.as_deref(),
             screenshot: self.screenshot_message.as_deref(),
-            schedule: self.updater.is_tunable().then(|| ScheduleInfo {
-                current: self.updater.build_schedule(),
-                tuned: self.tuned.as_ref().map(|(t, scene)| (t, scene.as_str())),
-            }),
+            schedule: schedule_info(&self.updater, self.animated.as_ref(), self.tuned.as_ref()),
             animation: self.animated.as_ref().map(|a| AnimationInfo {
                 clock: a.clock,
                 stage: a.stage(),
@@ -594,18 +592,30 @@ impl Viewer {
     }
 
     /// A new updater: no tuning yet; one at its next frame where asked, or after
-    /// `AUTO_TUNE_FRAMES` frames on a GPU by default.
+    /// `AUTO_TUNE_FRAMES` frames on a GPU by default, of the GPU rebuilds it brings: its own, or
+    /// beside a refit the comparison's. None where that builder kept a schedule before (which the
+    /// updater, or the comparison when it is made, takes), unless `--tune-schedule on`.
     fn new_updater(&mut self, ctx: &GpuContext) {
         self.tuned = None;
-        if let Some(schedule) = self.kept_schedule(self.updater.mode()) {
-            match self.updater.set_build_schedule(schedule) {
-                // Tuned before on this device: no tuning again unless asked.
-                Ok(()) if self.tune_option != Some(true) => {
-                    self.auto_tune_at = None;
-                    return;
+        let mode = self.updater.mode();
+        let rebuilds = if mode.is_refit() {
+            Companion::mode_for(mode)
+        } else {
+            Some(mode).filter(|_| self.updater.is_tunable())
+        };
+        let Some(rebuilds) = rebuilds else {
+            self.auto_tune_at = None;
+            return;
+        };
+        if let Some(schedule) = self.kept_schedule(rebuilds) {
+            if !mode.is_refit() {
+                if let Err(e) = self.updater.set_build_schedule(schedule) {
+                    self.error = Some(format!("cannot use the tuned schedule: {e}"));
                 }
-                Ok(()) => {}
-                Err(e) => self.error = Some(format!("cannot use the tuned schedule: {e}")),
+            }
+            if self.tune_option != Some(true) {
+                self.auto_tune_at = None;
+                return;
             }
         }
         let gpu = ctx.info.device_type != wgpu::DeviceType::Cpu;
@@ -614,24 +624,38 @@ impl Viewer {
             Some(false) => None,
             None => gpu.then_some(AUTO_TUNE_FRAMES),
         };
-        self.auto_tune_at = delay
-            .filter(|_| self.updater.is_tunable())
-            .map(|d| self.stats.frames + d);
+        self.auto_tune_at = delay.map(|d| self.stats.frames + d);
     }
 
     /// Tunes the build schedule on the current geometry (see the module header); a failure
     /// shows in the panel and keeps the schedule.
     fn tune_schedule(&mut self, ctx: &GpuContext) {
-        self.auto_tune_at = None;
-        let tuned = tune_updater(
-            ctx,
-            &mut self.updater,
-            &self.geometry,
-            &self.scene.triangles,
-            &mut self.tree,
-            &TuningOptions::default(),
-            0.0,
-        );
+        let pending = self.auto_tune_at.take();
+        let options = TuningOptions::default();
+        let (mode, tuned) = if self.updater.is_tunable() {
+            let tuned = tune_updater(
+                ctx,
+                &mut self.updater,
+                &self.geometry,
+                &self.scene.triangles,
+                &mut self.tree,
+                &options,
+                0.0,
+            );
+            (self.updater.mode(), tuned)
+        } else if let Some((updater, tree)) = self
+            .animated
+            .as_mut()
+            .and_then(AnimatedScene::tunable_companion)
+        {
+            // A traced refit: the comparison's rebuilds (GPU-resident geometry, as it records).
+            let tuned = tune_updater(ctx, updater, &self.geometry, &[], tree, &options, 0.0);
+            (updater.mode(), tuned)
+        } else {
+            // Beside a refit, the comparison is made at its first frame: tune it then.
+            self.auto_tune_at = pending.map(|at| at.max(self.stats.frames + 1));
+            return;
+        };
         match tuned {
             Ok(Some(tuned)) => {
                 log::info!(
@@ -640,7 +664,7 @@ impl Viewer {
                     tuned.builds,
                     tuned.wall_ms
                 );
-                if let UpdateMode::Rebuild(builder) = self.updater.mode() {
+                if let UpdateMode::Rebuild(builder) = mode {
                     self.kept_schedules.retain(|(b, _)| *b != builder);
                     self.kept_schedules.push((builder, tuned.schedule));
                 }
@@ -792,6 +816,25 @@ impl Viewer {
         tracer.record_tonemap(rec);
         Ok(())
     }
+}
+
+/// The GPU rebuilds' schedule for the panel: the traced `updater`'s, or beside a traced refit the
+/// comparison's; with the last tuning.
+fn schedule_info<'a>(
+    updater: &TreeUpdater,
+    animated: Option<&AnimatedScene>,
+    tuned: Option<&'a (TunedSchedule, String)>,
+) -> Option<ScheduleInfo<'a>> {
+    let (current, of_comparison) = if updater.is_tunable() {
+        (updater.build_schedule(), false)
+    } else {
+        (animated?.companion_schedule()?, true)
+    };
+    Some(ScheduleInfo {
+        current,
+        of_comparison,
+        tuned: tuned.map(|(t, scene)| (t, scene.as_str())),
+    })
 }
 
 impl SahDue {
