@@ -7,6 +7,7 @@
 // exactly on every device. A workgroup hashes a tile of 256 * ITEMS words, each invocation every
 // 256th (neighbouring invocations load neighbouring words), adds its sums to the workgroup's in
 // workgroup memory, and the workgroup adds its four to `hash` (zeroed before the dispatch).
+#include "random.wgsl"
 
 struct HashParams {
     count: u32,
@@ -25,20 +26,10 @@ struct HashParams {
 
 var<workgroup> sums: array<atomic<u32>, 4>;
 
-// The finalizer of MurmurHash3: every input bit moves every output bit.
-fn fmix(x: u32) -> u32 {
-    var h = x;
-    h ^= h >> 16u;
-    h *= 0x85ebca6bu;
-    h ^= h >> 13u;
-    h *= 0xc2b2ae35u;
-    h ^= h >> 16u;
-    return h;
-}
-
-// Word w's term of sum k (seeded by `seed`) at `key`.
+// Word w's term of sum k (seeded by `seed`) at `key`: two rounds of a bijective hash, so that
+// the terms of two different (word, key) pairs are unrelated.
 fn mix(w: u32, seed: u32, key: u32) -> u32 {
-    return fmix(fmix(w ^ seed) + key * 0x9e3779b9u);
+    return pcg_hash(pcg_hash(w ^ seed) + key * 0x9e3779b9u);
 }
 
 // Words per invocation (`fingerprint::HASH_ITEMS`).

@@ -81,14 +81,11 @@ impl WordsHash {
     }
 }
 
-/// The finalizer of MurmurHash3 (as in `words_hash.wgsl`).
-fn fmix(mut h: u32) -> u32 {
-    h ^= h >> 16;
-    h = h.wrapping_mul(0x85eb_ca6b);
-    h ^= h >> 13;
-    h = h.wrapping_mul(0xc2b2_ae35);
-    h ^= h >> 16;
-    h
+/// `pcg_hash` of `random.wgsl` (Jarzynski & Olano 2020), a bijection of u32.
+fn pcg_hash(x: u32) -> u32 {
+    let state = x.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
+    let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277_803_737);
+    (word >> 22) ^ word
 }
 
 /// The seeds of the four sums (as in `words_hash.wgsl`).
@@ -104,8 +101,8 @@ pub fn words_hash_cpu(words: &[u32], what: WordsHash) -> [u32; 4] {
         }
         let key = if what.positional { i as u32 } else { position };
         for (sum, seed) in sums.iter_mut().zip(SEEDS) {
-            *sum = sum.wrapping_add(fmix(
-                fmix(w ^ seed).wrapping_add(key.wrapping_mul(0x9e37_79b9)),
+            *sum = sum.wrapping_add(pcg_hash(
+                pcg_hash(w ^ seed).wrapping_add(key.wrapping_mul(0x9e37_79b9)),
             ));
         }
     }
