@@ -1,12 +1,13 @@
 // Ray queries through the compressed wide BVH: ray_queries.wgsl over the traversal of
-// wide_traverse.wgsl (same bindings as rays_intersect.wgsl, wide nodes at 2).
+// wide_traverse.wgsl (the bindings of rays_intersect.wgsl, with the wide nodes at 2 and the
+// references' triangles at 3).
 #include "wide_traverse.wgsl"
 #include "ray_queries.wgsl"
 
 @group(0) @binding(0) var<uniform> params: QueryParams;
 @group(0) @binding(1) var<storage, read> triangles: array<vec4<f32>>; // Triangle, three words each
 @group(0) @binding(2) var<storage, read> wide_nodes: array<vec4<u32>>; // WideNode, five words each
-@group(0) @binding(3) var<storage, read> prim_indices: array<u32>;
+@group(0) @binding(3) var<storage, read> wide_triangles: array<vec4<f32>>; // WideTree::triangles
 @group(0) @binding(4) var<storage, read> rays: array<Ray>;
 @group(0) @binding(5) var<storage, read_write> hits: array<Hit>;
 // [0]: stack overflows

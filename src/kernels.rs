@@ -39,6 +39,7 @@ pub const ALL: &[&KernelInfo] = &[
     &bvh::wide::COSTS_CLIMB.info,
     &bvh::wide::WIDE_NODES_EMIT.info,
     &bvh::wide::WIDE_NODES_FINISH.info,
+    &bvh::wide::TRIANGLES_GATHER.info,
     &anim::CLOTH_ANIMATE.info,
     &anim::BODIES_ANIMATE.info,
     &anim::DEBRIS_ANIMATE.info,

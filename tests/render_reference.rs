@@ -25,7 +25,7 @@ fn render(scene: &Scene, layout: Layout) -> image::RgbaImage {
     let geometry = Geometry::upload(gpu(), scene).unwrap();
     let mut tree = Tree::upload(gpu(), &bvh).unwrap();
     if layout == Layout::Wide {
-        convert_wide(&mut tree, WideCollapse::default());
+        convert_wide(&geometry, &mut tree, WideCollapse::default());
     }
     let settings = RenderSettings {
         width: 96,

@@ -17,8 +17,8 @@ use common::{
 use glam::Vec3;
 use treelet::bvh::treelet::TreeletSettings;
 use treelet::bvh::wide::{
-    max_wide_nodes, validate_wide, validate_wide_with_references, wide_sah_costs, Layout, Slot,
-    WideBvh, WideCollapse, WIDTH,
+    gather_triangles, max_wide_nodes, validate_wide, validate_wide_with_references, wide_sah_costs,
+    Layout, Slot, WideBvh, WideCollapse, WIDTH,
 };
 use treelet::bvh::{
     build_sweep_sah, read_wide_bvh, validate, write_wide_bvh, Builder, Bvh, BvhNode, SahParams,
@@ -26,6 +26,7 @@ use treelet::bvh::{
 };
 use treelet::device::{Geometry, Tree, WideTree};
 use treelet::geometry::{Aabb, Hit, Ray};
+use treelet::gpu::read_buffer;
 use treelet::scene::{load_scene, Scene, Triangle};
 use treelet::trace::{any_hits_wide, closest_hits, closest_hits_wide, PathTracer, RenderSettings};
 
@@ -115,6 +116,16 @@ fn check_conversion(
     assert!(
         canonical(&gpu_wide) == canonical(&cpu_wide),
         "{who}: the GPU conversion differs from its CPU twin"
+    );
+    let copies: Vec<Triangle> = read_buffer(
+        gpu(),
+        &tree.wide.as_ref().unwrap().triangles,
+        gpu_wide.prim_indices.len(),
+    )
+    .unwrap();
+    assert!(
+        copies == gather_triangles(&scene.triangles, &gpu_wide.prim_indices),
+        "{who}: the references' triangles"
     );
     let validation = if builder.duplicates_references() {
         validate_wide_with_references(&gpu_wide, &scene.triangles)
@@ -229,7 +240,7 @@ fn wide_hits_equal_brute_force() {
         let geometry = Geometry::upload(gpu(), scene).unwrap();
         let mut tree = Tree::upload(gpu(), &bvh).unwrap();
         for &collapse in WideCollapse::ALL {
-            convert_wide(&mut tree, collapse);
+            convert_wide(&geometry, &mut tree, collapse);
             let hits = closest_hits_wide(gpu(), &geometry, &tree, &plain).unwrap();
             assert_hits_match(&scene.triangles, &rays, &hits);
         }
@@ -254,7 +265,7 @@ fn optimal_collapse_is_smaller_and_traces_brute_force_hits() {
         let bvh = tree.download(gpu()).unwrap();
         let optimal = tree.wide.as_ref().unwrap().download(gpu()).unwrap();
         // The same binary tree, converted greedily (and traced as converted, below).
-        convert_wide(&mut tree, WideCollapse::Greedy);
+        convert_wide(&geometry, &mut tree, WideCollapse::Greedy);
         let greedy = tree.wide.as_ref().unwrap().download(gpu()).unwrap();
         assert!(
             optimal.nodes.len() < greedy.nodes.len(),
@@ -274,7 +285,7 @@ fn optimal_collapse_is_smaller_and_traces_brute_force_hits() {
             Some(WideBvh::from_binary_optimal(&bvh, &params).unwrap()),
         ] {
             if let Some(wide) = wide {
-                tree.wide = Some(WideTree::upload(gpu(), &wide).unwrap());
+                tree.wide = Some(WideTree::upload(gpu(), &wide, &scene.triangles).unwrap());
                 assert!(tree.wide.as_ref().unwrap().download(gpu()).unwrap() == wide);
             }
             let hits = closest_hits_wide(gpu(), &geometry, &tree, &plain).unwrap();
@@ -332,8 +343,9 @@ fn largest_conversion_fits_the_node_buffer() {
     let scene = scene_of(cells);
     let bvh = balanced_tree(&scene.triangles);
     validate(&bvh, &scene.triangles).unwrap();
+    let geometry = Geometry::upload(gpu(), &scene).unwrap();
     let mut tree = Tree::upload(gpu(), &bvh).unwrap();
-    convert_wide(&mut tree, WideCollapse::Greedy);
+    convert_wide(&geometry, &mut tree, WideCollapse::Greedy);
     let wide_tree = tree.wide.as_ref().unwrap();
     assert_eq!(
         wide_tree.capacity,
@@ -350,7 +362,7 @@ fn largest_conversion_fits_the_node_buffer() {
         canonical(&WideBvh::from_binary(&bvh).unwrap())
     );
     let mut tree = Tree::upload(gpu(), &bvh).unwrap();
-    convert_wide(&mut tree, WideCollapse::Optimal);
+    convert_wide(&geometry, &mut tree, WideCollapse::Optimal);
     let wide_tree = tree.wide.as_ref().unwrap();
     assert_eq!(wide_tree.capacity, 127);
     let wide = wide_tree.download(gpu()).unwrap();
@@ -620,7 +632,7 @@ fn the_gpu_fingerprint_equals_the_cpu_twin_and_ignores_wide_numbering() {
     let renumbered = renumbered_depth_first(&wide);
     validate_wide(&renumbered, &scene.triangles).unwrap();
     assert!(renumbered.nodes != wide.nodes && renumbered.prim_indices != wide.prim_indices);
-    tree.wide = Some(WideTree::upload(gpu(), &renumbered).unwrap());
+    tree.wide = Some(WideTree::upload(gpu(), &renumbered, &scene.triangles).unwrap());
     assert_eq!(
         TreeFingerprint::of(gpu(), &mut hasher, &tree).unwrap(),
         fingerprint,

@@ -8,6 +8,17 @@
 #include "ray_triangle.wgsl"
 #include "ray_box.wgsl"
 
+// Intersects the triangles of references first..end-1, keeping the closest hit in `best`.
+fn intersect_leaf(first: u32, end: u32, test: RayTriangleTest, t_min: f32, best: ptr<function, Hit>) {
+    for (var i = first; i < end; i++) {
+        let tri_index = prim_indices[i];
+        let h = intersect_triangle(test, load_triangle(tri_index), t_min, (*best).t);
+        if h.w != 0.0 {
+            *best = Hit(h.x, tri_index, h.y, h.z);
+        }
+    }
+}
+
 // The subtrees still to visit: (node, bits of its entry distance) per entry. The caller declares
 // it once per invocation and passes it to every `traverse`: WGSL zero-fills every variable, so a
 // stack declared in `traverse` would be cleared on every call (512 bytes of private memory).

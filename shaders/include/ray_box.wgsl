@@ -1,7 +1,5 @@
 // What both traversals share (binary: bvh_traverse.wgsl, wide: wide_traverse.wgsl): the ray as
-// the box test needs it, the robust slab test, the stack size, the result type and the
-// intersection of a leaf's references (the including kernel declares `prim_indices` and
-// `triangles`).
+// the box test needs it, the robust slab test, the stack size and the result type.
 #include "bvh_node.wgsl"
 #include "ray_triangle.wgsl"
 
@@ -47,13 +45,3 @@ struct TraceResult {
     overflow: u32,
 }
 
-// Intersects the triangles of references first..end-1, keeping the closest hit in `best`.
-fn intersect_leaf(first: u32, end: u32, test: RayTriangleTest, t_min: f32, best: ptr<function, Hit>) {
-    for (var i = first; i < end; i++) {
-        let tri_index = prim_indices[i];
-        let h = intersect_triangle(test, load_triangle(tri_index), t_min, (*best).t);
-        if h.w != 0.0 {
-            *best = Hit(h.x, tri_index, h.y, h.z);
-        }
-    }
-}

@@ -11,7 +11,8 @@
 // whose next child lies beyond the closest hit is dropped. The paper visits the internal children in
 // octant order too; sorted, rays test far fewer triangles (README, "Traversal"). The including
 // kernel declares `wide_nodes` (as array<vec4<u32>>: a node is read as five 16-byte loads, not
-// eleven, one per field), `prim_indices` and `triangles`, and passes a zero from a uniform
+// eleven, one per field) and `wide_triangles` (the references' triangles in order, each with its
+// index: `WideTree::triangles`), and passes a zero from a uniform
 // (`opaque_zero`) and its stack (see `TraversalStack`). CPU twin of the layout: `WideBvh`
 // (src/bvh/wide/node.rs).
 #include "wide_node.wgsl"
@@ -28,6 +29,21 @@ fn load_wide_node(index: u32) -> WideNode {
     let w3 = wide_nodes[5u * index + 3u];
     let w4 = wide_nodes[5u * index + 4u];
     return WideNode(bitcast<vec3<f32>>(w0.xyz), w0.w, w1.x, w1.y, w1.zw, w2.xy, w2.zw, w3.xy, w3.zw, w4.xy, w4.zw);
+}
+
+// Intersects the triangles of references first..end-1 (their copies in `wide_triangles`, each
+// with its triangle's index after v1), keeping the closest hit in `best`.
+fn intersect_wide_leaf(first: u32, end: u32, test: RayTriangleTest, t_min: f32, best: ptr<function, Hit>) {
+    for (var i = first; i < end; i++) {
+        let w0 = wide_triangles[3u * i];
+        let w1 = wide_triangles[3u * i + 1u];
+        let w2 = wide_triangles[3u * i + 2u];
+        let tri = Triangle(w0.xyz, bitcast<u32>(w0.w), w1.xyz, bitcast<u32>(w1.w), w2.xyz, bitcast<u32>(w2.w));
+        let h = intersect_triangle(test, tri, t_min, (*best).t);
+        if h.w != 0.0 {
+            *best = Hit(h.x, tri.pad1, h.y, h.z);
+        }
+    }
 }
 
 // Bit s^flip of the result is bit s of `mask` (8 bits): the slot order seen from a ray octant.
@@ -171,7 +187,7 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_ze
                 continue;
             }
             let first = leaf_first(node, slot);
-            intersect_leaf(first, first + slot_byte(node.leaf_counts, slot), test, t_min, &best);
+            intersect_wide_leaf(first, first + slot_byte(node.leaf_counts, slot), test, t_min, &best);
             if any_hit && best.tri != MISS {
                 return TraceResult(best, overflow);
             }

@@ -274,7 +274,7 @@ fn cpu_build(
         let mut timer = GpuTimer::new(ctx, 1);
         let mut slab = ParamSlab::new(ctx);
         let mut rec = Recorder::new(ctx, &mut slab, Some(&mut timer));
-        converter.record(&mut rec, &mut tree)?;
+        converter.record(&mut rec, &geometry, &mut tree)?;
         rec.submit();
         stages.extend(timer.read(ctx)?);
     }

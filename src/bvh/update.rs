@@ -322,7 +322,7 @@ impl TreeUpdater {
         }
         let cpu_time = self.record_binary(rec, geometry, triangles, tree)?;
         match &self.converter {
-            Some(converter) => converter.record(rec, tree)?,
+            Some(converter) => converter.record(rec, geometry, tree)?,
             None => tree.wide = None,
         }
         Ok(cpu_time)

@@ -20,6 +20,7 @@ use treelet::bvh::{
     TunedSchedule, TuningOptions,
 };
 use treelet::gpu::{aggregate_stages, check_climb_width, GpuContext, Spread, Timing, Warmup};
+use treelet::scene::Triangle;
 use treelet::sort::check_tile_items;
 use treelet::trace::{PathTracer, TraceStats};
 use treelet::Result;
@@ -293,6 +294,9 @@ struct BenchRecord {
     leaves: usize,
     /// Bytes of the traced layout's nodes and references.
     tree_bytes: usize,
+    /// Bytes of the triangles the traversal tests besides the scene's: the wide layout's copy of
+    /// its references' triangles in leaf order (48 bytes each); 0 for the binary layout.
+    leaf_triangle_bytes: usize,
     /// Timed runs of each series, and the warm-up asked for before each.
     repeats: u32,
     warmup_ms: f64,
@@ -480,7 +484,7 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
         let label = run_label(builder, schedule, layout, wide_options);
         let references = builder.duplicates_references();
         let mut wide_levels = None;
-        let (validation, nodes, leaves, tree_bytes) = match &tree.wide {
+        let (validation, nodes, leaves, tree_bytes, leaf_triangle_bytes) = match &tree.wide {
             None => {
                 let validation = if references {
                     validate_with_references(&bvh, &scene.triangles)
@@ -489,7 +493,7 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
                 };
                 let bytes =
                     std::mem::size_of_val(bvh.nodes.as_slice()) + 4 * bvh.prim_indices.len();
-                (validation, bvh.nodes.len(), bvh.leaf_count(), bytes)
+                (validation, bvh.nodes.len(), bvh.leaf_count(), bytes, 0)
             }
             Some(wide) => {
                 let wide = wide.download(gpu)?;
@@ -509,6 +513,7 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
                     wide.nodes.len(),
                     wide.leaf_count(),
                     wide.bytes(),
+                    wide.prim_indices.len() * std::mem::size_of::<Triangle>(),
                 )
             }
         };
@@ -581,6 +586,7 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
             nodes,
             leaves,
             tree_bytes,
+            leaf_triangle_bytes,
             repeats: timing.repeats,
             warmup_ms: timing.warmup_ms,
             build_ms: report.build_ms,

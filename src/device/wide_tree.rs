@@ -1,18 +1,23 @@
 //! A compressed wide BVH on the GPU (layout of `bvh::wide::WideNode`), converted from a binary
-//! `Tree` by `bvh::wide::WideConverter`. `counters` holds [nodes, references, capacity
+//! `Tree` by `bvh::wide::WideConverter`, with its references' triangles in order (`triangles`,
+//! what the wide traversal tests). `counters` holds [nodes, references, capacity
 //! overflows, end of the level dispatches' nodes] as the GPU wrote them; `records` the
 //! conversion's per-level records (indirect dispatch arguments; even levels in the first buffer,
 //! odd in the second); `collapse` the optimal collapse's scratch, per binary node. The buffers
 //! grow to what a conversion needs and are reused.
 
-use crate::bvh::wide::{WideBvh, WideNode};
+use crate::bvh::wide::{gather_triangles, WideBvh, WideNode};
 use crate::gpu::constants::COLLAPSE_COST_WORDS;
 use crate::gpu::{indirect_buffer_zeroed, read_buffer, storage_buffer_zeroed, GpuContext};
+use crate::scene::Triangle;
 use crate::{Error, Result};
 
 pub struct WideTree {
     pub nodes: wgpu::Buffer,
     pub prim_indices: wgpu::Buffer,
+    /// The triangles of `prim_indices` in order, each with its index in its `_pad1` word: what
+    /// the wide traversal tests (`bvh::wide::gather_triangles`, kernel `triangles_gather`).
+    pub triangles: wgpu::Buffer,
     /// The binary node each wide node was made from (conversion scratch).
     pub sources: wgpu::Buffer,
     pub counters: wgpu::Buffer,
@@ -73,6 +78,11 @@ impl WideTree {
                 u64::from(nodes) * std::mem::size_of::<WideNode>() as u64,
             )?,
             prim_indices: storage_buffer_zeroed(ctx, "wide prim indices", u64::from(prims) * 4)?,
+            triangles: storage_buffer_zeroed(
+                ctx,
+                "wide triangles",
+                u64::from(prims) * std::mem::size_of::<Triangle>() as u64,
+            )?,
             sources: storage_buffer_zeroed(ctx, "wide sources", u64::from(nodes) * 4)?,
             counters: storage_buffer_zeroed(ctx, "wide counters", 16)?,
             records: [
@@ -84,10 +94,21 @@ impl WideTree {
         })
     }
 
-    /// A wide tree made on the CPU (e.g. by `WideBvh::from_binary_optimal`), uploaded for
-    /// tracing: its nodes, references and counts, as a conversion would leave them.
-    pub fn upload(ctx: &GpuContext, wide: &WideBvh) -> Result<Self> {
+    /// A wide tree made on the CPU (e.g. by `WideBvh::from_binary_optimal`) over `triangles`,
+    /// uploaded for tracing: its nodes, references, their triangles and counts, as a conversion
+    /// would leave them.
+    pub fn upload(ctx: &GpuContext, wide: &WideBvh, triangles: &[Triangle]) -> Result<Self> {
         let (nodes, prims) = (wide.nodes.len() as u32, wide.prim_indices.len() as u32);
+        if let Some(&bad) = wide
+            .prim_indices
+            .iter()
+            .find(|&&i| i as usize >= triangles.len())
+        {
+            return Err(Error::InvalidArgument(format!(
+                "wide tree references triangle {bad} of {}",
+                triangles.len()
+            )));
+        }
         let tree = Self::new(ctx, nodes, prims, 1, 12)?;
         ctx.queue
             .write_buffer(&tree.nodes, 0, bytemuck::cast_slice(&wide.nodes));
@@ -96,6 +117,11 @@ impl WideTree {
                 &tree.prim_indices,
                 0,
                 bytemuck::cast_slice(&wide.prim_indices),
+            );
+            ctx.queue.write_buffer(
+                &tree.triangles,
+                0,
+                bytemuck::cast_slice(&gather_triangles(triangles, &wide.prim_indices)),
             );
         }
         ctx.queue

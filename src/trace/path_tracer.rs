@@ -186,7 +186,9 @@ impl PathTracer {
                 per_dispatch * MAX_DISPATCHES
             )));
         }
-        let (kernel, nodes, prim_indices) = match s.layout {
+        // What the leaves' references are tested through: the binary tree's indices into the
+        // triangles, the wide tree's copies of its references' triangles.
+        let (kernel, nodes, leaf_data) = match s.layout {
             Layout::Binary => (&self.trace, &tree.nodes, &tree.prim_indices),
             Layout::Wide => {
                 let wide = tree.wide.as_ref().ok_or_else(|| {
@@ -194,7 +196,7 @@ impl PathTracer {
                         "the wide layout was asked for, but the tree was not converted".into(),
                     )
                 })?;
-                (&self.trace_wide, &wide.nodes, &wide.prim_indices)
+                (&self.trace_wide, &wide.nodes, &wide.triangles)
             }
         };
         if self.samples_done == 0 {
@@ -215,7 +217,7 @@ impl PathTracer {
                     &geometry.triangles,
                     &geometry.materials,
                     nodes,
-                    prim_indices,
+                    leaf_data,
                     &self.accum,
                     &self.counters,
                     &geometry.lights,

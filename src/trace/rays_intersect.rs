@@ -93,7 +93,9 @@ fn query(
             ray.t_min, ray.t_max
         )));
     }
-    let (kernel, nodes, prim_indices) = match layout {
+    // What the leaves' references are tested through: the binary tree's indices into the
+    // triangles, the wide tree's copies of its references' triangles.
+    let (kernel, nodes, leaf_data) = match layout {
         Layout::Binary => (
             Kernel::new(ctx, &RAYS_INTERSECT),
             &tree.nodes,
@@ -106,7 +108,7 @@ fn query(
             (
                 Kernel::new(ctx, &RAYS_INTERSECT_WIDE),
                 &wide.nodes,
-                &wide.prim_indices,
+                &wide.triangles,
             )
         }
     };
@@ -129,7 +131,7 @@ fn query(
         &[
             &geometry.triangles,
             nodes,
-            prim_indices,
+            leaf_data,
             &ray_buffer,
             &hits,
             &counters,

@@ -305,13 +305,18 @@ pub fn record_update(
     Ok(())
 }
 
-/// Converts `tree` into the wide layout on the GPU (`tree.wide`), as an update does.
-pub fn convert_wide(tree: &mut treelet::device::Tree, collapse: treelet::bvh::wide::WideCollapse) {
+/// Converts `tree` over `geometry` into the wide layout on the GPU (`tree.wide`), as an update
+/// does.
+pub fn convert_wide(
+    geometry: &treelet::device::Geometry,
+    tree: &mut treelet::device::Tree,
+    collapse: treelet::bvh::wide::WideCollapse,
+) {
     let mut slab = treelet::gpu::ParamSlab::new(gpu());
     let mut rec = treelet::gpu::Recorder::new(gpu(), &mut slab, None);
     let mut converter =
         treelet::bvh::wide::WideConverter::new(gpu(), &treelet::bvh::SahParams::default());
     converter.set_collapse(collapse);
-    converter.record(&mut rec, tree).unwrap();
+    converter.record(&mut rec, geometry, tree).unwrap();
     rec.submit();
 }

@@ -6,16 +6,18 @@
 //! and the `START_LEVELS` levels below it (at most 8 and 64 wide nodes) are one direct dispatch
 //! of one workgroup; each of the next levels up to `level_dispatches` is an indirect dispatch
 //! whose size the previous level wrote (`wide_nodes_emit`); whatever lies deeper is emitted by
-//! one workgroup, level after level (`wide_nodes_finish`). No CPU round trip.
+//! one workgroup, level after level (`wide_nodes_finish`). Last, `triangles_gather` copies the
+//! references' triangles in order for the traversal. No CPU round trip.
 
 use super::convert::max_wide_nodes;
 use super::costs_climb::{CostParams, COSTS_CLIMB};
 use super::nodes_link::NODES_LINK;
+use super::triangles_gather::TRIANGLES_GATHER;
 use super::wide_nodes_emit::{WideParams, WIDE_NODES_EMIT};
 use super::wide_nodes_finish::WIDE_NODES_FINISH;
 use super::{WideCollapse, WideOptions};
 use crate::bvh::{BvhNode, SahParams};
-use crate::device::{Tree, WideTree};
+use crate::device::{Geometry, Tree, WideTree};
 use crate::gpu::{GpuContext, ItemCount, Items};
 use crate::gpu::{Grid, Kernel, Recorder};
 use crate::Result;
@@ -33,6 +35,7 @@ pub struct WideConverter {
     costs: Kernel<CostParams>,
     emit: Kernel<WideParams>,
     finish: Kernel<WideParams>,
+    gather: Kernel<Items>,
     /// The collapse and the forced level dispatches of the next conversions.
     options: WideOptions,
     /// Ci and Ct of the optimal collapse's costs.
@@ -48,6 +51,7 @@ impl WideConverter {
             costs: Kernel::climb(ctx, &COSTS_CLIMB),
             emit: Kernel::new(ctx, &WIDE_NODES_EMIT),
             finish: Kernel::new(ctx, &WIDE_NODES_FINISH),
+            gather: Kernel::new(ctx, &TRIANGLES_GATHER),
             options: WideOptions::default(),
             sah: *sah,
         }
@@ -92,9 +96,14 @@ impl WideConverter {
         self.options.level_dispatches = dispatches.map(|d| d.min(MAX_WIDE_LEVEL_DISPATCHES));
     }
 
-    /// Records the conversion of `tree`'s binary tree into `tree.wide` (created or grown to the
-    /// capacity of the binary buffers).
-    pub fn record(&self, rec: &mut Recorder<'_>, tree: &mut Tree) -> Result<()> {
+    /// Records the conversion of `tree`'s binary tree over `geometry` into `tree.wide` (created
+    /// or grown to the capacity of the binary buffers).
+    pub fn record(
+        &self,
+        rec: &mut Recorder<'_>,
+        geometry: &Geometry,
+        tree: &mut Tree,
+    ) -> Result<()> {
         let ctx = rec.ctx;
         let binary_nodes = (tree.nodes.size() / std::mem::size_of::<BvhNode>() as u64) as u32;
         let prims = (tree.prim_indices.size() / 4) as u32;
@@ -212,6 +221,16 @@ impl WideConverter {
             Grid::workgroups(1, 1),
             &params(last),
             &buffers(last),
+        );
+        pass.dispatch_items(
+            &self.gather,
+            prims,
+            &[
+                &geometry.triangles,
+                &wide.prim_indices,
+                &wide.counters,
+                &wide.triangles,
+            ],
         );
         Ok(())
     }
