@@ -606,7 +606,8 @@ fn renumbered_depth_first(wide: &WideBvh) -> WideBvh {
 
 /// The tuning's tree fingerprint, hashed on the GPU, equals its CPU twin over the trees read back;
 /// every level schedule of the conversion gives it; the wide layout's does not depend on how its
-/// nodes and references are numbered; another tree has another one.
+/// nodes and references are numbered; another tree, or another set of references, has another
+/// one.
 #[test]
 fn the_gpu_fingerprint_equals_the_cpu_twin_and_ignores_wide_numbering() {
     let scene = load_scene("field-10k").unwrap();
@@ -637,6 +638,15 @@ fn the_gpu_fingerprint_equals_the_cpu_twin_and_ignores_wide_numbering() {
         TreeFingerprint::of(gpu(), &mut hasher, &tree).unwrap(),
         fingerprint,
         "renumbered depth first"
+    );
+    // One reference twice and another missing: the same nodes, another tree.
+    let mut duplicated = renumbered.clone();
+    duplicated.prim_indices[0] = duplicated.prim_indices[1];
+    tree.wide = Some(WideTree::upload(gpu(), &duplicated, &scene.triangles).unwrap());
+    assert_ne!(
+        TreeFingerprint::of(gpu(), &mut hasher, &tree).unwrap(),
+        fingerprint,
+        "a reference duplicated"
     );
     let (_, lbvh) = build_wide(&scene, Builder::Lbvh, WideCollapse::Greedy, None);
     let lbvh_fingerprint = TreeFingerprint::of(gpu(), &mut hasher, &lbvh).unwrap();

@@ -8,7 +8,8 @@
 //! 2^-128 per accidental difference. The wide layout is hashed as the multiset of its nodes'
 //! contents without the two words that hold other nodes' and references' numbers (`child_base`,
 //! `prim_base`), since its conversion numbers wide nodes by atomics (two conversions of one binary
-//! tree may order them differently), plus its node and reference counts.
+//! tree may order them differently), its references as a multiset (each present, none twice),
+//! plus its node and reference counts.
 //!
 //! CPU twin: [`words_hash_cpu`], the same sums, which the GPU's equal exactly (they wrap, so the
 //! workgroups' order does not matter).
@@ -166,8 +167,9 @@ const _: () = assert!(std::mem::offset_of!(WideNode, prim_base) == 20);
 pub struct TreeFingerprint {
     /// Node and reference counts, and the hashes of the nodes and of the references.
     pub binary: ([u32; 2], [u32; 4], [u32; 4]),
-    /// The same for the wide layout, when the tree has one (its nodes as a multiset).
-    pub wide: Option<([u32; 2], [u32; 4])>,
+    /// The same for the wide layout, when the tree has one (its nodes and its references as
+    /// multisets).
+    pub wide: Option<([u32; 2], [u32; 4], [u32; 4])>,
 }
 
 impl TreeFingerprint {
@@ -184,7 +186,11 @@ impl TreeFingerprint {
             Some(wide) => {
                 let (nodes, prims) = wide.counts(ctx)?;
                 let what = WordsHash::records(nodes, WIDE_NODE_WORDS, WIDE_NUMBERING_WORDS);
-                Some(([nodes, prims], hasher.hash(ctx, &wide.nodes, what)?))
+                Some((
+                    [nodes, prims],
+                    hasher.hash(ctx, &wide.nodes, what)?,
+                    hasher.hash(ctx, &wide.prim_indices, WordsHash::records(prims, 1, 0))?,
+                ))
             }
             None => None,
         };
@@ -208,6 +214,10 @@ impl TreeFingerprint {
             (
                 [nodes, wide.prim_indices.len() as u32],
                 words_hash_cpu(bytemuck::cast_slice(&wide.nodes), what),
+                words_hash_cpu(
+                    &wide.prim_indices,
+                    WordsHash::records(wide.prim_indices.len() as u32, 1, 0),
+                ),
             )
         });
         Self { binary, wide }
