@@ -17,7 +17,7 @@ use super::stats::FrameStats;
 use crate::anim::{AnimateStage, ANIMATIONS};
 use crate::bvh::wide::{Layout, WideCollapse, WideNode, WIDTH};
 use crate::bvh::{BuildSchedule, Builder, BvhNode, TunedSchedule, UpdateMode};
-use crate::scene::SCENES;
+use crate::scene::{Triangle, SCENES};
 
 /// Width of the panel in points.
 pub const PANEL_WIDTH: f32 = 330.0;
@@ -269,6 +269,11 @@ fn tree_size(ui: &mut egui::Ui, info: &PanelInfo) {
                 "tree: {}{ratio}; binary {}",
                 size_text(wide),
                 size_text(binary)
+            ));
+            let copies = u64::from(references) * std::mem::size_of::<Triangle>() as u64;
+            ui.label(format!(
+                "leaf triangles: {} (copied in leaf order)",
+                size_text(copies)
             ));
         }
         (Layout::Wide, None) => {
