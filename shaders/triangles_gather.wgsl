@@ -3,14 +3,16 @@
 // (`pad1`), so that the wide traversal tests a leaf's triangles from consecutive words, without a
 // load of the reference's index before each (Ylitie et al. 2017 keep the triangles in leaf order
 // too). One invocation per reference slot; the conversion's counters give the references written.
+// The words move as integers (bound as u32 vectors), so no float semantics (a flush of the
+// denormal bit patterns of small indices and materials) can touch them.
 #include "items.wgsl"
 
 @group(0) @binding(0) var<uniform> params: Items;
-@group(0) @binding(1) var<storage, read> triangles: array<vec4<f32>>; // Triangle, three words each
+@group(0) @binding(1) var<storage, read> triangles: array<vec4<u32>>; // Triangle, three words each
 @group(0) @binding(2) var<storage, read> wide_prims: array<u32>;
 // The conversion's counters: [1] the references written (wide_collapse.wgsl).
 @group(0) @binding(3) var<storage, read> wide_counters: array<u32>;
-@group(0) @binding(4) var<storage, read_write> wide_triangles: array<vec4<f32>>;
+@group(0) @binding(4) var<storage, read_write> wide_triangles: array<vec4<u32>>;
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -20,6 +22,6 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let tri = wide_prims[i];
     wide_triangles[3u * i] = triangles[3u * tri];
-    wide_triangles[3u * i + 1u] = vec4<f32>(triangles[3u * tri + 1u].xyz, bitcast<f32>(tri));
+    wide_triangles[3u * i + 1u] = vec4<u32>(triangles[3u * tri + 1u].xyz, tri);
     wide_triangles[3u * i + 2u] = triangles[3u * tri + 2u];
 }
