@@ -467,6 +467,13 @@ fn tracing_the_wide_layout_needs_a_conversion() {
     assert!(e.contains("not converted"), "{e}");
     let rays = [Ray::new(glam::Vec3::ZERO, glam::Vec3::X, 0.0, f32::MAX)];
     assert!(closest_hits_wide(gpu(), &geometry, &tree, &rays).is_err());
+    // An uploaded wide tree must reference the triangles it is uploaded with.
+    let wide = WideBvh::from_binary(&bvh).unwrap();
+    let e = WideTree::upload(gpu(), &wide, &scene.triangles[..50])
+        .err()
+        .expect("references past the triangles refused")
+        .to_string();
+    assert!(e.contains("references triangle"), "{e}");
 }
 
 #[test]
