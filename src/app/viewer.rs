@@ -49,7 +49,8 @@ use super::tree_snapshot::TreeSnapshot;
 use crate::anim::{is_animation, load_animation};
 use crate::bvh::wide::Layout;
 use crate::bvh::{
-    tune_updater, BuildSchedule, Builder, TreeUpdater, TunedSchedule, TuningOptions, UpdateMode,
+    tune_updater, tunes_by_default, BuildSchedule, Builder, TreeUpdater, TunedSchedule,
+    TuningOptions, UpdateMode,
 };
 use crate::device::{Geometry, Tree};
 use crate::gpu::{GpuContext, ParamSlab, Recorder};
@@ -618,11 +619,10 @@ impl Viewer {
                 return;
             }
         }
-        let gpu = ctx.info.device_type != wgpu::DeviceType::Cpu;
         let delay = match self.tune_option {
             Some(true) => Some(0),
             Some(false) => None,
-            None => gpu.then_some(AUTO_TUNE_FRAMES),
+            None => tunes_by_default(ctx).then_some(AUTO_TUNE_FRAMES),
         };
         self.auto_tune_at = delay.map(|d| self.stats.frames + d);
     }

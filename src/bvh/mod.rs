@@ -28,8 +28,8 @@ pub use sah::{sah_cost, SahParams};
 pub use sbvh::build_sbvh;
 pub use sweep::build_sweep_sah;
 pub use tuning::{
-    tune_schedule, tune_updater, BuildSchedule, DeviceTrials, SchedulePins, ScheduleTrial,
-    ScheduleTrials, TunedSchedule, TuningOptions, TuningSpace,
+    tune_schedule, tune_updater, tunes_by_default, BuildSchedule, DeviceTrials, SchedulePins,
+    ScheduleTrial, ScheduleTrials, TunedSchedule, TuningOptions, TuningSpace,
 };
 pub use update::{TreeUpdater, UpdateMode};
 pub use validate::{validate, validate_with_references, ValidationError, ValidationStats};

@@ -120,7 +120,7 @@ impl Default for TuningOptions {
 /// What a tuning needs from the device.
 pub trait ScheduleTrials {
     /// Builds once with `schedule`, untimed (its kernels compile), and tells whether the tree is
-    /// the one the starting schedule built, bit for bit.
+    /// the one the starting schedule built (`DeviceTrials`: by their `TreeFingerprint`s).
     fn builds_reference_tree(&mut self, schedule: BuildSchedule) -> Result<bool>;
     /// Builds once with `schedule`: the build's time, ms.
     fn time_build(&mut self, schedule: BuildSchedule) -> Result<f64>;
@@ -230,24 +230,18 @@ impl Dimension {
                     })
                 })
                 .to_vec(),
-            Dimension::LevelDispatches => {
-                let default = space.round_levels.unwrap_or(0);
-                std::iter::once(None)
-                    .chain(LEVEL_DISPATCH_STEPS.map(|step| {
-                        Some(
-                            default
-                                .saturating_add_signed(step)
-                                .min(MAX_LEVEL_DISPATCHES),
-                        )
-                    }))
-                    .map(|level_dispatches| {
-                        rounds(RoundSchedule {
-                            level_dispatches,
-                            ..k
-                        })
-                    })
-                    .collect()
-            }
+            Dimension::LevelDispatches => stepped_counts(
+                space.round_levels,
+                LEVEL_DISPATCH_STEPS,
+                MAX_LEVEL_DISPATCHES,
+            )
+            .map(|level_dispatches| {
+                rounds(RoundSchedule {
+                    level_dispatches,
+                    ..k
+                })
+            })
+            .collect(),
             Dimension::SortTile => std::iter::once(None)
                 .chain(SORT_TILE_ITEMS.map(Some))
                 .map(|sort_tile_items| BuildSchedule {
@@ -255,22 +249,16 @@ impl Dimension {
                     ..kept
                 })
                 .collect(),
-            Dimension::WideLevels => {
-                let default = space.wide_levels.unwrap_or(0);
-                std::iter::once(None)
-                    .chain(WIDE_LEVEL_STEPS.map(|step| {
-                        Some(
-                            default
-                                .saturating_add_signed(step)
-                                .min(MAX_WIDE_LEVEL_DISPATCHES),
-                        )
-                    }))
-                    .map(|wide_level_dispatches| BuildSchedule {
-                        wide_level_dispatches,
-                        ..kept
-                    })
-                    .collect()
-            }
+            Dimension::WideLevels => stepped_counts(
+                space.wide_levels,
+                WIDE_LEVEL_STEPS,
+                MAX_WIDE_LEVEL_DISPATCHES,
+            )
+            .map(|wide_level_dispatches| BuildSchedule {
+                wide_level_dispatches,
+                ..kept
+            })
+            .collect(),
         };
         let mut distinct: Vec<BuildSchedule> = Vec::new();
         for v in values {
@@ -291,21 +279,38 @@ impl Dimension {
             Dimension::Dp => ra.dp() == rb.dp(),
             Dimension::ClimbDp => ra.climb_dp() == rb.climb_dp(),
             Dimension::TeamBelow => ra.team_below() == rb.team_below(),
-            Dimension::LevelDispatches => {
-                let default = space.round_levels.unwrap_or(0);
-                ra.level_dispatches.unwrap_or(default) == rb.level_dispatches.unwrap_or(default)
-            }
+            Dimension::LevelDispatches => same_count(
+                ra.level_dispatches,
+                rb.level_dispatches,
+                space.round_levels.unwrap_or(0),
+            ),
             Dimension::SortTile => {
-                a.sort_tile_items.unwrap_or(space.sort_tile_items)
-                    == b.sort_tile_items.unwrap_or(space.sort_tile_items)
+                same_count(a.sort_tile_items, b.sort_tile_items, space.sort_tile_items)
             }
-            Dimension::WideLevels => {
-                let default = space.wide_levels.unwrap_or(0);
-                a.wide_level_dispatches.unwrap_or(default)
-                    == b.wide_level_dispatches.unwrap_or(default)
-            }
+            Dimension::WideLevels => same_count(
+                a.wide_level_dispatches,
+                b.wide_level_dispatches,
+                space.wide_levels.unwrap_or(0),
+            ),
         }
     }
+}
+
+/// The counts a tuning tries of a dimension whose default is `default`: None (the default), then
+/// the default moved by each of `steps`, at most `max`.
+fn stepped_counts(
+    default: Option<u32>,
+    steps: [i32; 3],
+    max: u32,
+) -> impl Iterator<Item = Option<u32>> {
+    let default = default.unwrap_or(0);
+    std::iter::once(None)
+        .chain(steps.map(move |step| Some(default.saturating_add_signed(step).min(max))))
+}
+
+/// Whether two settings of a count (None: `default`) are the same in effect.
+fn same_count(a: Option<u32>, b: Option<u32>, default: u32) -> bool {
+    a.unwrap_or(default) == b.unwrap_or(default)
 }
 
 /// Whether two schedules run the same way.
@@ -459,6 +464,12 @@ pub fn tune_schedule(
     })
 }
 
+/// Whether a tuning runs unless asked otherwise (`--tune-schedule auto`): on GPUs, not on CPU
+/// devices, where it takes minutes.
+pub fn tunes_by_default(ctx: &GpuContext) -> bool {
+    ctx.info.device_type != wgpu::DeviceType::Cpu
+}
+
 /// Tunes `updater`'s build schedule on `geometry` (whose CPU triangles are `triangles`) into
 /// `tree`, after untimed builds for `warmup_ms` of wall-clock time (a GPU that idled needs some
 /// before its timings mean anything), and sets the schedule kept. None where no tuning applies
@@ -491,7 +502,8 @@ pub fn tune_updater(
 }
 
 /// Trials on the GPU: builds of `geometry` through `updater` (a GPU builder's, not a refit's)
-/// into `tree`, the starting schedule's tree read back once as the reference.
+/// into `tree`, each compared with the starting schedule's tree by their fingerprints
+/// (`TreeFingerprint`, hashed on the GPU).
 pub struct DeviceTrials<'a> {
     ctx: &'a GpuContext,
     updater: &'a mut TreeUpdater,
@@ -504,7 +516,7 @@ pub struct DeviceTrials<'a> {
 }
 
 impl<'a> DeviceTrials<'a> {
-    /// Builds once with `start` and reads the tree back as the reference.
+    /// Builds once with `start` and keeps its tree's fingerprint as the reference.
     pub fn new(
         ctx: &'a GpuContext,
         updater: &'a mut TreeUpdater,

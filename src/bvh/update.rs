@@ -16,7 +16,7 @@ use super::{build_sbvh, build_sweep_sah, Builder, SahParams};
 use crate::device::{Geometry, Tree};
 use crate::gpu::{GpuContext, Recorder, StageTime};
 use crate::scene::Triangle;
-use crate::sort::tile_items;
+use crate::sort::context_tile_items;
 use crate::{Error, Result};
 
 /// The per-frame tree update of an animated scene.
@@ -249,24 +249,20 @@ impl TreeUpdater {
             return None;
         }
         let device = ctx.info.device_type;
-        // The stages' sizes: the references of pre-splitting where the builder splits.
-        let prims = match &self.producer {
-            Producer::Trbvh(b) => b.leaf_capacity(triangles),
-            _ => triangles,
-        };
-        let round_levels = match &self.producer {
-            Producer::Trbvh(b) => Some(RoundSchedule::default_level_dispatches(
-                prims,
-                b.settings.treelet_size,
-                device,
-            )),
-            _ => None,
+        // The stages' sizes (the references of pre-splitting where the builder splits) and the
+        // treelet rounds' level dispatches.
+        let (prims, round_levels) = match &self.producer {
+            Producer::Trbvh(b) => {
+                let prims = b.leaf_capacity(triangles);
+                let gamma = b.settings.treelet_size;
+                let levels = RoundSchedule::default_level_dispatches(prims, gamma, device);
+                (prims, Some(levels))
+            }
+            _ => (triangles, None),
         };
         Some(TuningSpace {
             round_levels,
-            sort_tile_items: ctx
-                .sort_tile_items
-                .unwrap_or_else(|| tile_items(prims, device)),
+            sort_tile_items: context_tile_items(ctx, prims),
             wide_levels: self
                 .converter
                 .is_some()

@@ -16,8 +16,8 @@ use treelet::bvh::wide::{
     WideOptions, MAX_WIDE_LEVEL_DISPATCHES,
 };
 use treelet::bvh::{
-    sah_cost, validate, validate_with_references, write_bvh, write_wide_bvh, Builder, SchedulePins,
-    TunedSchedule, TuningOptions,
+    sah_cost, tunes_by_default, validate, validate_with_references, write_bvh, write_wide_bvh,
+    Builder, SchedulePins, TunedSchedule, TuningOptions,
 };
 use treelet::gpu::{aggregate_stages, check_climb_width, GpuContext, Spread, Timing, Warmup};
 use treelet::scene::Triangle;
@@ -209,9 +209,7 @@ impl BenchArgs {
         let tune = match self.tune_schedule {
             TuneSchedule::On => true,
             TuneSchedule::Off => false,
-            TuneSchedule::Auto => {
-                gpu.info.device_type != wgpu::DeviceType::Cpu && pins == SchedulePins::default()
-            }
+            TuneSchedule::Auto => tunes_by_default(gpu) && pins == SchedulePins::default(),
         };
         Ok(tune.then_some(TuningOptions {
             pairs: self.tune_pairs,

@@ -21,7 +21,9 @@ use std::time::Instant;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use treelet::anim::load_animation;
-use treelet::bvh::{sah_cost, tune_updater, Builder, TreeUpdater, TuningOptions, UpdateMode};
+use treelet::bvh::{
+    sah_cost, tune_updater, tunes_by_default, Builder, TreeUpdater, TuningOptions, UpdateMode,
+};
 use treelet::device::{Geometry, Tree};
 use treelet::gpu::{aggregate_stages, GpuContext, GpuTimer, ParamSlab, Recorder, StageTime};
 use treelet::trace::{save_png, PathTracer};
@@ -109,7 +111,7 @@ pub fn run(gpu: &GpuContext, args: &RenderArgs, frames: u32) -> Result<()> {
             mode.name()
         )));
     }
-    let tune = forced.unwrap_or(gpu.info.device_type != wgpu::DeviceType::Cpu);
+    let tune = forced.unwrap_or_else(|| tunes_by_default(gpu));
     if tune {
         // The first frame's geometry, after half a second of builds (GPU clocks).
         if let Some(tuned) = tune_updater(

@@ -61,6 +61,13 @@ pub fn check_tile_items(items: u32) -> Result<u32> {
     crate::error::one_of("sort tile items", items, &SORT_TILE_ITEMS)
 }
 
+/// The tile a sort of `len` keys takes on `ctx` unless it is fixed (`RadixSort::set_tile_items`):
+/// the context's `sort_tile_items`, else `tile_items`.
+pub fn context_tile_items(ctx: &GpuContext, len: u32) -> u32 {
+    ctx.sort_tile_items
+        .unwrap_or_else(|| tile_items(len, ctx.info.device_type))
+}
+
 /// Keys per invocation (a tile is 256 times as many keys) for `len` keys on a device of
 /// `device` type. Each scatter workgroup sums 16 counts per tile, so the work of finding the
 /// offsets grows with the square of the tile count; smaller tiles give more workgroups.
@@ -265,8 +272,7 @@ impl RadixSort {
         let passes = pass_count(key_bits);
         let items = self
             .fixed_tile_items
-            .or(ctx.sort_tile_items)
-            .unwrap_or_else(|| tile_items(len, ctx.info.device_type));
+            .unwrap_or_else(|| context_tile_items(ctx, len));
         let variant = SORT_TILE_ITEMS
             .iter()
             .position(|&i| i == items)

@@ -10,7 +10,10 @@
 use super::Measurement;
 use crate::bvh::treelet::RoundSchedule;
 use crate::bvh::wide::{Layout, WideOptions};
-use crate::bvh::{sah_cost, validate, validate_with_references, Builder, SahParams, TuningOptions};
+use crate::bvh::{
+    sah_cost, tunes_by_default, validate, validate_with_references, Builder, SahParams,
+    TuningOptions,
+};
 use crate::gpu::{GpuContext, Timing};
 use crate::scene::{Camera, Scene};
 use crate::trace::PathTracer;
@@ -49,9 +52,7 @@ pub fn measure(
         Layout::Binary,
         WideOptions::default(),
         RoundSchedule::default(),
-        (ctx.info.device_type != wgpu::DeviceType::Cpu)
-            .then(TuningOptions::default)
-            .as_ref(),
+        tunes_by_default(ctx).then(TuningOptions::default).as_ref(),
     )?;
     let bvh = tree.download(ctx)?;
     let validation = if builder.duplicates_references() {
