@@ -8,7 +8,7 @@
 @group(0) @binding(1) var<storage, read> triangles: array<vec4<f32>>; // Triangle, three words each
 @group(0) @binding(2) var<storage, read> materials: array<Material>;
 @group(0) @binding(3) var<storage, read> wide_nodes: array<vec4<u32>>; // WideNode, five words each
-@group(0) @binding(4) var<storage, read> wide_triangles: array<vec4<f32>>; // WideTree::triangles
+@group(0) @binding(4) var<storage, read> wide_triangles: array<vec4<u32>>; // WideTree::triangles, as words
 @group(0) @binding(5) var<storage, read_write> accum: array<vec4<f32>>;
 // Per dispatch (counter_slot): [2 slot]: rays traced, [2 slot + 1]: stack overflows
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>>;

@@ -7,7 +7,7 @@
 @group(0) @binding(0) var<uniform> params: QueryParams;
 @group(0) @binding(1) var<storage, read> triangles: array<vec4<f32>>; // Triangle, three words each
 @group(0) @binding(2) var<storage, read> wide_nodes: array<vec4<u32>>; // WideNode, five words each
-@group(0) @binding(3) var<storage, read> wide_triangles: array<vec4<f32>>; // WideTree::triangles
+@group(0) @binding(3) var<storage, read> wide_triangles: array<vec4<u32>>; // WideTree::triangles, as words
 @group(0) @binding(4) var<storage, read> rays: array<Ray>;
 @group(0) @binding(5) var<storage, read_write> hits: array<Hit>;
 // [0]: stack overflows

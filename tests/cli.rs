@@ -252,22 +252,41 @@ fn bench_compares_dp_forms_on_the_same_tree() {
     }
 }
 
-/// `bench --round-overlap none,6,4` measures trbvh with the rounds one after another and
+/// `bench --round-overlap none,6,7` measures trbvh with the rounds one after another and
 /// overlapped at each reach, reports the reach (null for none), and builds the same tree at
-/// reach 6 (the scene's overlapped rounds give the sequential tree).
+/// reaches 6 and 7 (the scene's overlapped rounds give the sequential tree); a reach below the
+/// treelet size's least is refused with an error.
 #[test]
 fn bench_round_overlap_reports_each_reach() {
-    let records = quick_bench("trbvh", &["--round-overlap", "none,6,4"]);
+    let records = quick_bench("trbvh", &["--round-overlap", "none,6,7"]);
     let reaches: Vec<_> = records
         .iter()
         .map(|r| r["round_overlap"].as_u64())
         .collect();
-    assert_eq!(reaches, [None, Some(6), Some(4)]);
+    assert_eq!(reaches, [None, Some(6), Some(7)]);
     for record in &records {
         assert_eq!(record["valid"], true);
     }
-    assert_eq!(records[1]["sah"], records[0]["sah"]);
-    assert_eq!(records[1]["nodes"], records[0]["nodes"]);
+    for record in &records[1..] {
+        assert_eq!(record["sah"], records[0]["sah"]);
+        assert_eq!(record["nodes"], records[0]["nodes"]);
+    }
+    // Below treelet size − 1 two treelets of a wave could share nodes: refused.
+    let refused = treelet(&[
+        "bench",
+        "--scene",
+        "cornell",
+        "--builder",
+        "trbvh",
+        "--round-overlap",
+        "5",
+    ]);
+    assert!(!refused.status.success());
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert!(
+        stderr.contains("round overlap reach of 5 is below 6, the least for treelets of 7 leaves"),
+        "{stderr}"
+    );
 }
 
 /// `bench --tune-schedule on` tunes lbvh's and trbvh's build schedules from the one given

@@ -11,9 +11,9 @@ use glam::Vec3;
 use rand::Rng;
 use treelet::bvh::lbvh::{build_lbvh_from_boxes_cpu, prim_boxes_cpu, TRBVH_KEY_BITS};
 use treelet::bvh::treelet::{
-    build_trbvh_cpu, optimize_lbvh_cpu, solve_treelet, subsets_by_size, surface_area, CostModel,
-    RoundSchedule, TrbvhBuilder, TreeletDp, TreeletLeaf, TreeletSettings, WorkingTree,
-    MAX_LEVEL_DISPATCHES,
+    build_trbvh_cpu, optimize_lbvh_cpu, overlap_reach, solve_treelet, subsets_by_size,
+    surface_area, CostModel, RoundSchedule, TrbvhBuilder, TreeletDp, TreeletLeaf, TreeletSettings,
+    WorkingTree, MAX_LEVEL_DISPATCHES,
 };
 use treelet::bvh::wide::{validate_wide_with_references, Layout, WideOptions};
 use treelet::bvh::{
@@ -621,11 +621,13 @@ fn overlapped_rounds_on_the_gpu_equal_the_cpu_twin() {
             (None, Some(u32::MAX)),
             (Some(0), Some(u32::MAX)),
         ];
+        // The least reach for the treelet size: 6 for 7 leaves, 7 for the high preset's 8.
+        let reach = overlap_reach(settings.treelet_size);
         for (levels, team_below) in schedules {
             builder.set_schedule(RoundSchedule {
                 level_dispatches: levels,
                 team_below,
-                overlap: Some(6),
+                overlap: Some(reach),
                 ..RoundSchedule::default()
             });
             let stages = builder.build_stages(gpu(), &geometry).unwrap();
@@ -635,7 +637,12 @@ fn overlapped_rounds_on_the_gpu_equal_the_cpu_twin() {
                 scene.triangles.len()
             );
             let mut cpu = stages.lbvh.clone();
-            cpu.optimize_overlapped(&model, settings.treelet_size, &settings.gammas(), Some(6));
+            cpu.optimize_overlapped(
+                &model,
+                settings.treelet_size,
+                &settings.gammas(),
+                Some(reach),
+            );
             assert_optimizer_agrees(&stages.working, &cpu, &builder.sah);
             assert!(
                 stages.working == sequential.working,

@@ -32,13 +32,14 @@ fn load_wide_node(index: u32) -> WideNode {
 }
 
 // Intersects the triangles of references first..end-1 (their copies in `wide_triangles`, each
-// with its triangle's index after v1), keeping the closest hit in `best`.
+// with its triangle's index after v1), keeping the closest hit in `best`. Bound as words, so the
+// index and material (denormal bit patterns as floats) come through no float handling.
 fn intersect_wide_leaf(first: u32, end: u32, test: RayTriangleTest, t_min: f32, best: ptr<function, Hit>) {
     for (var i = first; i < end; i++) {
         let w0 = wide_triangles[3u * i];
         let w1 = wide_triangles[3u * i + 1u];
         let w2 = wide_triangles[3u * i + 2u];
-        let tri = Triangle(w0.xyz, bitcast<u32>(w0.w), w1.xyz, bitcast<u32>(w1.w), w2.xyz, bitcast<u32>(w2.w));
+        let tri = Triangle(bitcast<vec3<f32>>(w0.xyz), w0.w, bitcast<vec3<f32>>(w1.xyz), w1.w, bitcast<vec3<f32>>(w2.xyz), w2.w);
         let h = intersect_triangle(test, tri, t_min, (*best).t);
         if h.w != 0.0 {
             *best = Hit(h.x, tri.pad1, h.y, h.z);

@@ -16,7 +16,7 @@
 use std::time::Instant;
 
 use super::fingerprint::{TreeFingerprint, WordsHasher};
-use super::treelet::{RoundSchedule, TreeletDp, MAX_LEVEL_DISPATCHES, OVERLAP_REACH};
+use super::treelet::{RoundSchedule, TreeletDp, MAX_LEVEL_DISPATCHES};
 use super::wide::MAX_WIDE_LEVEL_DISPATCHES;
 use super::TreeUpdater;
 use crate::device::{Geometry, Tree};
@@ -75,6 +75,8 @@ impl BuildSchedule {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TuningSpace {
     pub round_levels: Option<u32>,
+    /// The reach the overlapped rounds take (`treelet::overlap_reach` of the treelet size).
+    pub overlap_reach: u32,
     pub sort_tile_items: u32,
     pub wide_levels: Option<u32>,
 }
@@ -201,7 +203,7 @@ impl Dimension {
         let rounds = |r: RoundSchedule| BuildSchedule { rounds: r, ..kept };
         let k = kept.rounds;
         let values: Vec<BuildSchedule> = match self {
-            Dimension::Overlap => [None, Some(OVERLAP_REACH)]
+            Dimension::Overlap => [None, Some(space.overlap_reach)]
                 .map(|overlap| rounds(RoundSchedule { overlap, ..k }))
                 .to_vec(),
             // The climb keeps its form (by default it follows the dispatched levels').
@@ -604,6 +606,7 @@ mod tests {
     /// tile) and 20 (wide level dispatches).
     const SPACE: TuningSpace = TuningSpace {
         round_levels: Some(14),
+        overlap_reach: 6,
         sort_tile_items: 8,
         wide_levels: Some(20),
     };
@@ -664,7 +667,7 @@ mod tests {
             &SPACE,
         );
         let kept = tuned.schedule;
-        assert_eq!(kept.rounds.overlap, Some(OVERLAP_REACH));
+        assert_eq!(kept.rounds.overlap, Some(SPACE.overlap_reach));
         assert_eq!(kept.rounds.climb_dp(), TreeletDp::Loop);
         assert_eq!(kept.rounds.dp(), TreeletDp::Unrolled);
         assert_eq!(kept.rounds.level_dispatches, Some(11));
@@ -692,6 +695,7 @@ mod tests {
         // An LBVH in the binary layout: the sort tile alone.
         let space = TuningSpace {
             round_levels: None,
+            overlap_reach: 0,
             sort_tile_items: 8,
             wide_levels: None,
         };

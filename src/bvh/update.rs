@@ -9,7 +9,7 @@ use std::time::Instant;
 
 use super::lbvh::{LbvhBuilder, LBVH_PASSES};
 use super::nodes_refit::{derive_refit_links, NodesRefit};
-use super::treelet::{RoundSchedule, TrbvhBuilder, TreeletSettings};
+use super::treelet::{overlap_reach, RoundSchedule, TrbvhBuilder, TreeletSettings};
 use super::tuning::{BuildSchedule, TuningSpace};
 use super::wide::{Layout, WideCollapse, WideConverter, WideOptions, MAX_WIDE_LEAF_SIZE};
 use super::{build_sbvh, build_sweep_sah, Builder, SahParams};
@@ -251,17 +251,18 @@ impl TreeUpdater {
         let device = ctx.info.device_type;
         // The stages' sizes (the references of pre-splitting where the builder splits) and the
         // treelet rounds' level dispatches.
-        let (prims, round_levels) = match &self.producer {
+        let (prims, round_levels, overlap_reach) = match &self.producer {
             Producer::Trbvh(b) => {
                 let prims = b.leaf_capacity(triangles);
                 let gamma = b.settings.treelet_size;
                 let levels = RoundSchedule::default_level_dispatches(prims, gamma, device);
-                (prims, Some(levels))
+                (prims, Some(levels), overlap_reach(gamma))
             }
-            _ => (triangles, None),
+            _ => (triangles, None, 0),
         };
         Some(TuningSpace {
             round_levels,
+            overlap_reach,
             sort_tile_items: context_tile_items(ctx, prims),
             wide_levels: self
                 .converter

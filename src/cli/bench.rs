@@ -455,6 +455,12 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
                 .flat_map(move |s| layout_runs.iter().map(move |&(l, c)| (b, s, l, c)))
         })
         .collect();
+    // Refused before any run, not after the runs before it.
+    for &(builder, schedule, _, _) in &runs {
+        if let Some(settings) = builder.treelet_settings() {
+            schedule.check_overlap(settings.treelet_size)?;
+        }
+    }
     for &(builder, schedule, layout, wide_options) in &runs {
         let (geometry, tree, report) = builder.build(
             gpu,

@@ -99,8 +99,9 @@ impl WorkingTree {
     /// of treelet level w in wave w) and, for r > 1, which with its ancestors up to `reach`
     /// levels up is done in round r − 1 (`None`: all of them, so each round waits for the whole
     /// round before: the sequential rounds, one wave per treelet level). A wave's treelets are
-    /// disjoint (a treelet
-    /// spans six levels at most), so their order does not matter. Internal nodes a treelet
+    /// disjoint when `reach` is at least `treelet_size` − 1 (the levels a treelet reaches below
+    /// its root; `overlap_reach`), so their order does not matter; with less they can share
+    /// nodes, and this twin gives the result of processing them by (round, node). Internal nodes a treelet
     /// rewrites count as done in its round and the ones before (their sequential visit came
     /// first). Returns the treelets optimized in each wave: as many waves as a GPU schedule would
     /// have dependent steps. Counts and costs are computed afresh before and after.

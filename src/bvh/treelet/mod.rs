@@ -29,7 +29,7 @@ pub use nodes_level::NODES_LEVEL;
 pub use nodes_mark::NODES_MARK;
 pub use treelets_climb::TREELETS_CLIMB;
 pub use treelets_optimize::TREELETS_OPTIMIZE;
-pub use waves::{OVERLAP_REACH, WAVES_CLIMB, WAVES_FIND, WAVES_OPTIMIZE};
+pub use waves::{overlap_reach, WAVES_CLIMB, WAVES_FIND, WAVES_OPTIMIZE};
 
 pub use dp_unrolled::TreeletDp;
 pub use rounds::RoundSchedule;
@@ -411,6 +411,9 @@ impl TrbvhBuilder {
         lbvh_out: Option<&mut Option<WorkingTree>>,
     ) -> Result<()> {
         self.settings.validate(&self.sah)?;
+        self.rounds
+            .schedule
+            .check_overlap(self.settings.treelet_size)?;
         let ctx = rec.ctx;
         let budget = split_budget(geometry.triangle_count, self.settings.split_percent);
         // The leaves: the triangles, or the references of pre-splitting (counted on the GPU).

@@ -32,13 +32,13 @@ use super::dp_unrolled::{TreeletDp, TREELET_DP_LOOP_OVERRIDE, TREELET_SIZE_OVERR
 use super::nodes_level::NODES_LEVEL;
 use super::treelets_climb::TREELETS_CLIMB;
 use super::treelets_optimize::TREELETS_OPTIMIZE;
-use super::waves::Overlap;
+use super::waves::{overlap_reach, Overlap};
 use crate::gpu::constants::{MAX_LEVEL_DISPATCHES, MAX_TREELET_SIZE, MIN_TREELET_SIZE};
 use crate::gpu::{
     storage_buffer, storage_buffer_zeroed, GpuContext, Grid, ItemCount, Kernel, KernelDecl, Pass,
     Recorder,
 };
-use crate::Result;
+use crate::{Error, Result};
 
 /// Parameters of every kernel of a round (WGSL twin in `shaders/include/treelet_round.wgsl`).
 #[repr(C)]
@@ -200,13 +200,27 @@ pub struct RoundSchedule {
     pub climb_dp: Option<TreeletDp>,
     /// The rounds overlapped in waves with this reach (`waves`, the GPU twin of
     /// `WorkingTree::optimize_overlapped`), each round starting on a root once it and its
-    /// ancestors within the reach are done in the round before; None: the rounds one after
-    /// another. The level dispatches (above) times the rounds are the waves dispatched, the
+    /// ancestors within the reach are done in the round before; at least `overlap_reach` of the
+    /// treelet size (a build refuses less); None: the rounds one after another. The level dispatches (above) times the rounds are the waves dispatched, the
     /// climb takes the rest; teams apply to the climb's waves.
     pub overlap: Option<u32>,
 }
 
 impl RoundSchedule {
+    /// Fails when the rounds overlap with a reach below the least for treelets of
+    /// `treelet_size` leaves (`overlap_reach`): a wave's treelets could then share nodes.
+    pub fn check_overlap(&self, treelet_size: u32) -> Result<()> {
+        let least = overlap_reach(treelet_size);
+        match self.overlap {
+            Some(reach) if reach < least => Err(Error::InvalidArgument(format!(
+                "a round overlap reach of {reach} is below {least}, the least for treelets of \
+                 {treelet_size} leaves (a treelet reaches that many levels below its root, so the \
+                 treelets of one wave could share nodes)"
+            ))),
+            _ => Ok(()),
+        }
+    }
+
     /// The team threshold in effect.
     pub fn team_below(&self) -> u32 {
         self.team_below.unwrap_or(DEFAULT_TEAM_BELOW)

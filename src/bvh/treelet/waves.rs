@@ -26,11 +26,17 @@ kernel!(pub WAVES_CLIMB: RoundParams = "waves_climb"::"main", [128, 1, 1],
     [ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite,
      Read]);
 
-/// The reach that keeps the rounds' trees (`RoundSchedule::overlap`): a treelet spans six
-/// levels, so a round starts on a root once it and its ancestors six levels up are done in the
-/// round before; on every scene measured the trees are those of the rounds one after another
+/// The smallest reach the overlapped rounds take for treelets of `treelet_size` leaves
+/// (`RoundSchedule::overlap`; a smaller one is refused): a treelet reaches `treelet_size` − 1
+/// levels below its root (its leaves), so a round starts on a root once it and its ancestors
+/// that many levels up are done in the round before, and no treelet of that round still to come
+/// can touch it. With less, two treelets of one wave could share nodes, which a GPU runs side by
+/// side (a race; the CPU twin, one treelet after another, would hide it). With 7 leaves this is
+/// 6, at which on every scene measured the trees are those of the rounds one after another
 /// (README, "Rounds can overlap"), and the tests compare them.
-pub const OVERLAP_REACH: u32 = 6;
+pub fn overlap_reach(treelet_size: u32) -> u32 {
+    treelet_size.saturating_sub(1)
+}
 
 /// Words of the wave state (`treelet_waves.wgsl`): counts, tickets, the stop flag.
 const WAVE_STATE_WORDS: u64 = 6;
