@@ -27,6 +27,11 @@
 // at most 512 per workgroup). The buffers rotate over three passes: the scatter reads `counts`,
 // adds into `next_counts`, which the dispatch before zeroed, and zeroes its tile's words of
 // `cleared_counts`, into which the scatter after it adds.
+// Values (`params.pairs`): in `values_in`, moved to `values_out` beside the keys
+// (PAIRS_SEPARATE); or in the keys' high words, which a sort of at most 32 bits never reads as
+// digits (`RadixSort::record_packed`): each pair then moves as one 8-byte store (PAIRS_PACKED),
+// and the last pass writes the key with a high word of 0 and the value to `values_out`
+// (PAIRS_UNPACK), so the sorted buffers are those of the separate form.
 // 11 KiB of workgroup memory; no subgroup operations.
 // Tiles are linear workgroup indices over a 1D or 2D grid: wid.x + wid.y * num_workgroups.x.
 // Tile geometry, parameters and digit counting are shared with keys_histogram.wgsl
@@ -43,6 +48,11 @@
 @group(0) @binding(8) var<storage, read> count_limit: array<u32>;
 
 #include "radix_digits.wgsl"
+
+// Values of `params.pairs` (Rust twin: `Pairs` in src/sort/radix_sort.rs).
+const PAIRS_SEPARATE: u32 = 0u;
+const PAIRS_PACKED: u32 = 1u;
+const PAIRS_UNPACK: u32 = 2u;
 
 // Component i of v, with selects (dynamic indexing is slow on some drivers).
 fn pick(v: vec4<u32>, i: u32) -> u32 {
@@ -161,8 +171,15 @@ fn main(
             let slots = select(select(slots0, slots1, q == 1u), select(slots2, slots3, q == 3u), q >= 2u);
             let dest = pick(slots, d & 3u) + ((pick(seen, q) >> ((d & 3u) * 8u)) & 0xffu);
             seen += one_hot(d);
-            keys_out[dest] = key;
-            values_out[dest] = values_in[item];
+            if params.pairs == PAIRS_SEPARATE {
+                keys_out[dest] = key;
+                values_out[dest] = values_in[item];
+            } else if params.pairs == PAIRS_PACKED {
+                keys_out[dest] = key;
+            } else {
+                keys_out[dest] = vec2<u32>(key.x, 0u);
+                values_out[dest] = key.y;
+            }
             if gather_next {
                 let second_tile = dest / size - tile_offsets[d] / size;
                 let next = digit_at(key, params.next_shift, params.next_bits);

@@ -3,7 +3,8 @@
 // of MORTON_GRID (2^21) cells per axis; the full key interleaves the high MORTON_AXIS_BITS (16) bits
 // of each axis (48 bits: bit 3k+2 holds x's kept bit k, 3k+1 y's, 3k z's), and the kernel writes its
 // high `params.key_bits` bits. The grid is cubic (cell size from the longest side), so thin axes do
-// not waste top-level splits. Keys are vec2<u32>(low 32 bits, high 32 bits).
+// not waste top-level splits. Keys are vec2<u32>(low 32 bits, high 32 bits); keys of at most 32
+// bits can carry the sort's value (the index) in their high word instead (`params.packed`).
 #include "constants.wgsl"
 #include "box_words.wgsl"
 
@@ -13,7 +14,9 @@ struct MortonParams {
     row_pitch: u32,
     // 1..=48: the high bits of the full key that the key keeps.
     key_bits: u32,
-    pad: u32,
+    // 1: the index goes in the key's high word, not in `values` (keys of at most 32 bits, sorted
+    // by `RadixSort::record_packed`); 0: the key's high word is its own.
+    packed: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: MortonParams;
@@ -59,6 +62,10 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     } else if drop > 0u {
         key = vec2<u32>((key.x >> drop) | (key.y << (32u - drop)), key.y >> drop);
     }
-    keys[i] = key;
-    values[i] = i;
+    if params.packed != 0u {
+        keys[i] = vec2<u32>(key.x, i);
+    } else {
+        keys[i] = key;
+        values[i] = i;
+    }
 }

@@ -1,12 +1,13 @@
 //! The GPU radix sort (`sort::RadixSort`) and its CPU twin against `sort_unstable` on
-//! (key, value) pairs with values 0..n: equal results mean sorted by key and stable.
+//! (key, value) pairs with values 0..n: equal results mean sorted by key and stable. Sorts of at
+//! most 32 bits run with the values in the keys' high words too (`record_packed`).
 
 mod common;
 
 use common::{gpu, rng};
 use rand::Rng;
 use treelet::gpu::{ItemCount, ParamSlab, Recorder};
-use treelet::sort::{sort_pairs_cpu, RadixSort, SORT_TILE_ITEMS};
+use treelet::sort::{sort_pairs_cpu, RadixSort, PACKED_KEY_BITS, SORT_TILE_ITEMS};
 
 /// The largest tile: 256 invocations of 32 keys.
 const SORT_TILE: usize = 256 * 32;
@@ -38,8 +39,24 @@ fn expected(keys: &[u64], key_bits: u32) -> (Vec<u64>, Vec<u32>) {
     pairs.into_iter().map(|(_, v, k)| (k, v)).unzip()
 }
 
-/// Sorts with the GPU and the CPU twin and compares both with `expected`.
+/// Sorts with the GPU and the CPU twin and compares both with `expected`; with at most 32 key bits
+/// also with the values in the keys' high words (`sort_pairs_packed`), whose sorted keys are the
+/// low words with high words of 0.
 fn check(sorter: &mut RadixSort, keys: &[u64], key_bits: u32) {
+    if key_bits <= PACKED_KEY_BITS {
+        let values: Vec<u32> = (0..keys.len() as u32).collect();
+        let (want_keys, want_values) = expected(keys, key_bits);
+        let gpu_keys: Vec<[u32; 2]> = keys.iter().map(|&k| split(k)).collect();
+        let (got_keys, got_values) = sorter
+            .sort_pairs_packed(gpu(), &gpu_keys, &values, key_bits)
+            .unwrap();
+        let want_keys: Vec<[u32; 2]> = want_keys.iter().map(|&k| [k as u32, 0]).collect();
+        assert!(
+            got_keys == want_keys && got_values == want_values,
+            "packed GPU sort of n = {} with key_bits = {key_bits}",
+            keys.len()
+        );
+    }
     let values: Vec<u32> = (0..keys.len() as u32).collect();
     let (want_keys, want_values) = expected(keys, key_bits);
     let (cpu_keys, cpu_values) = sort_pairs_cpu(keys, &values, key_bits);
@@ -233,6 +250,8 @@ fn invalid_arguments_are_errors() {
     assert!(sorter.sort_pairs(ctx, &[[0, 0]], &[0], 0).is_err());
     assert!(sorter.sort_pairs(ctx, &[[0, 0]], &[0], 65).is_err());
     assert!(sorter.sort_pairs(ctx, &[[0, 0]], &[0, 1], 8).is_err());
+    // The values in the keys' high words leave at most 32 bits to sort.
+    assert!(sorter.sort_pairs_packed(ctx, &[[0, 0]], &[0], 33).is_err());
 }
 
 #[test]
@@ -253,40 +272,63 @@ fn cpu_twin_matches_sort_unstable() {
 
 /// A pair count computed on the GPU (here written by a buffer copy in the same recording): the
 /// passes are sized for the capacity, the first `count` pairs end sorted and the pairs past them
-/// are left as they are.
+/// are left as they are; also with the values in the keys' high words (at most 32 bits), whose
+/// pairs past the count stay packed.
 #[test]
 fn a_count_on_the_gpu_sorts_only_its_pairs() {
     let ctx = gpu();
     let mut sorter = RadixSort::new(ctx);
     for (capacity, count, bits) in [(40_000usize, 29_999usize, 63), (9000, 8192, 32), (5, 2, 63)] {
         let keys = random_keys(capacity, bits, capacity as u64);
-        let split_keys: Vec<[u32; 2]> = keys.iter().map(|&k| split(k)).collect();
         let values: Vec<u32> = (0..capacity as u32).collect();
-        let kbuf = treelet::gpu::storage_buffer(ctx, "keys", &split_keys).unwrap();
-        let vbuf = treelet::gpu::storage_buffer(ctx, "values", &values).unwrap();
-        let source = treelet::gpu::storage_buffer(ctx, "count source", &[count as u32]).unwrap();
-        let count_buffer = treelet::gpu::storage_buffer(ctx, "count", &[0u32]).unwrap();
-        let mut params = ParamSlab::new(ctx);
-        let mut rec = Recorder::new(ctx, &mut params, None);
-        rec.encoder()
-            .copy_buffer_to_buffer(&source, 0, &count_buffer, 0, 4);
-        let len = ItemCount::OnGpu {
-            buffer: &count_buffer,
-            capacity: capacity as u32,
-        };
-        sorter.record(&mut rec, &kbuf, &vbuf, len, bits).unwrap();
-        rec.submit();
-        let got_keys: Vec<[u32; 2]> = treelet::gpu::read_buffer(ctx, &kbuf, capacity).unwrap();
-        let got_values: Vec<u32> = treelet::gpu::read_buffer(ctx, &vbuf, capacity).unwrap();
-        let got_keys: Vec<u64> = got_keys.into_iter().map(join).collect();
-        let (want_keys, want_values) = expected(&keys[..count], bits);
-        assert!(
-            got_keys[..count] == want_keys[..] && got_values[..count] == want_values[..],
-            "{count} of {capacity} pairs"
-        );
-        assert!(
-            got_keys[count..] == keys[count..] && got_values[count..] == values[count..],
-            "pairs past the count moved ({count} of {capacity})"
-        );
+        for packed in [false, true] {
+            if packed && bits > PACKED_KEY_BITS {
+                continue;
+            }
+            let split_keys: Vec<[u32; 2]> = keys
+                .iter()
+                .zip(&values)
+                .map(|(&k, &v)| if packed { [k as u32, v] } else { split(k) })
+                .collect();
+            // Packed, the values buffer starts with other words: past the count they stay.
+            let start_values: Vec<u32> = if packed {
+                values.iter().map(|v| !v).collect()
+            } else {
+                values.clone()
+            };
+            let kbuf = treelet::gpu::storage_buffer(ctx, "keys", &split_keys).unwrap();
+            let vbuf = treelet::gpu::storage_buffer(ctx, "values", &start_values).unwrap();
+            let source =
+                treelet::gpu::storage_buffer(ctx, "count source", &[count as u32]).unwrap();
+            let count_buffer = treelet::gpu::storage_buffer(ctx, "count", &[0u32]).unwrap();
+            let mut params = ParamSlab::new(ctx);
+            let mut rec = Recorder::new(ctx, &mut params, None);
+            rec.encoder()
+                .copy_buffer_to_buffer(&source, 0, &count_buffer, 0, 4);
+            let len = ItemCount::OnGpu {
+                buffer: &count_buffer,
+                capacity: capacity as u32,
+            };
+            if packed {
+                sorter.record_packed(&mut rec, &kbuf, &vbuf, len, bits)
+            } else {
+                sorter.record(&mut rec, &kbuf, &vbuf, len, bits)
+            }
+            .unwrap();
+            rec.submit();
+            let got_keys: Vec<[u32; 2]> = treelet::gpu::read_buffer(ctx, &kbuf, capacity).unwrap();
+            let got_values: Vec<u32> = treelet::gpu::read_buffer(ctx, &vbuf, capacity).unwrap();
+            let (want_keys, want_values) = expected(&keys[..count], bits);
+            let want_keys: Vec<[u32; 2]> = want_keys.into_iter().map(split).collect();
+            assert!(
+                got_keys[..count] == want_keys[..] && got_values[..count] == want_values[..],
+                "{count} of {capacity} pairs (packed: {packed})"
+            );
+            assert!(
+                got_keys[count..] == split_keys[count..]
+                    && got_values[count..] == start_values[count..],
+                "pairs past the count moved ({count} of {capacity}, packed: {packed})"
+            );
+        }
     }
 }

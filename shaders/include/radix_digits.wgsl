@@ -9,7 +9,8 @@ override TILE_ITEMS: u32 = 32u;
 #include "constants.wgsl"
 
 // The pass's digit: `bits` bits from bit `shift`; the next pass's digit, whose counts the pass
-// gathers: `next_bits` (0 after the last pass) bits from `next_shift`.
+// gathers: `next_bits` (0 after the last pass) bits from `next_shift`; where the values are
+// (`pairs`: PAIRS_SEPARATE, PAIRS_PACKED or PAIRS_UNPACK, keys_scatter.wgsl).
 struct SortParams {
     n: u32,
     num_tiles: u32,
@@ -17,6 +18,8 @@ struct SortParams {
     bits: u32,
     next_shift: u32,
     next_bits: u32,
+    pairs: u32,
+    pad: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: SortParams;

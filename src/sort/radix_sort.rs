@@ -25,6 +25,12 @@
 //! field:2000's sort 7.47 -> 9.45 ms, conference's 0.24 -> 0.33 ms; README, "On an NVIDIA H200,
 //! second session"), and 1.7-3.5x on lavapipe, so they were taken out.
 //!
+//! Values beside the keys, or in them: a sort of at most 32 key bits can take its values in the
+//! keys' high words, which it never reads as digits (`record_packed`; the LBVH's Morton keys of
+//! the treelet builders): every pass but the last then moves each pair as one 8-byte word, where
+//! the separate form reads and scatters 12 bytes in two stores (one memory sector each on a GPU),
+//! and the last pass writes keys and values apart, as the separate form leaves them.
+//!
 //! Digit width: 4 bits, measured about 2.5x faster on the software driver (lavapipe, 2 cores,
 //! 1M pairs, 63-bit keys: about 0.14 s) than 8-bit digits ranked by workgroup-memory "ballots"
 //! (match ranking with two barriers per 256 pairs): 16 counters fit in one vec4 of byte-wide
@@ -88,8 +94,22 @@ pub fn tile_items(len: u32, device: wgpu::DeviceType) -> u32 {
     }
 }
 
+/// Where a pass finds and leaves the values (`pairs` of `SortParams`; the constants `PAIRS_*` of
+/// keys_scatter.wgsl).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u32)]
+enum Pairs {
+    /// In the values buffers, moved beside the keys.
+    Separate = 0,
+    /// In the keys' high words, moved with them.
+    Packed = 1,
+    /// In the keys' high words, written to the values buffer (the keys' high words become 0).
+    Unpack = 2,
+}
+
 /// Parameters of one sort pass (keys_histogram.wgsl, keys_scatter.wgsl): its digit, `bits` bits
-/// from bit `shift`, and the next pass's digit (`next_bits` = 0 after the last pass).
+/// from bit `shift`, the next pass's digit (`next_bits` = 0 after the last pass) and where the
+/// values are (`Pairs`).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 pub struct SortParams {
@@ -99,14 +119,23 @@ pub struct SortParams {
     bits: u32,
     next_shift: u32,
     next_bits: u32,
+    pairs: u32,
+    _pad: u32,
 }
-const _: () = assert!(std::mem::size_of::<SortParams>() == 24);
+const _: () = assert!(std::mem::size_of::<SortParams>() == 32);
 
 impl SortParams {
-    /// Pass `pass` of a sort of `len` pairs in `num_tiles` tiles by the low `key_bits` bits.
-    fn pass(len: u32, num_tiles: u32, key_bits: u32, pass: u32) -> Self {
+    /// Pass `pass` of a sort of `len` pairs in `num_tiles` tiles by the low `key_bits` bits,
+    /// with values as `packed` says (`record_packed`): in the keys' high words, unpacked by the
+    /// last pass.
+    fn pass(len: u32, num_tiles: u32, key_bits: u32, pass: u32, packed: bool) -> Self {
         let shift = pass * RADIX_BITS;
         let next_shift = shift + RADIX_BITS;
+        let pairs = match (packed, pass + 1 == pass_count(key_bits)) {
+            (false, _) => Pairs::Separate,
+            (true, false) => Pairs::Packed,
+            (true, true) => Pairs::Unpack,
+        };
         Self {
             n: len,
             num_tiles,
@@ -114,9 +143,14 @@ impl SortParams {
             bits: RADIX_BITS.min(key_bits - shift),
             next_shift,
             next_bits: RADIX_BITS.min(key_bits.saturating_sub(next_shift)),
+            pairs: pairs as u32,
+            _pad: 0,
         }
     }
 }
+
+/// The most key bits a sort with its values in the keys' high words sorts (`record_packed`).
+pub const PACKED_KEY_BITS: u32 = 32;
 
 /// Number of passes for `key_bits` sorted bits.
 fn pass_count(key_bits: u32) -> u32 {
@@ -242,6 +276,41 @@ impl RadixSort {
         len: ItemCount<'_>,
         key_bits: u32,
     ) -> Result<()> {
+        self.record_pairs(rec, keys, values, len, key_bits, false)
+    }
+
+    /// Like `record`, for keys of at most `PACKED_KEY_BITS` (1..=32) bits whose high words hold
+    /// the values (`keys[i] = [key, value]`; `values` is not read): the passes move each pair as
+    /// one word, and the sorted pairs end as `record` leaves them, the keys in `keys` with high
+    /// words of 0 and the values in `values`. Pairs past a count computed on the GPU are left as
+    /// they are (packed).
+    pub fn record_packed(
+        &mut self,
+        rec: &mut Recorder<'_>,
+        keys: &wgpu::Buffer,
+        values: &wgpu::Buffer,
+        len: ItemCount<'_>,
+        key_bits: u32,
+    ) -> Result<()> {
+        if key_bits > PACKED_KEY_BITS {
+            return Err(Error::InvalidArgument(format!(
+                "a radix sort with the values in the keys' high words sorts at most \
+                 {PACKED_KEY_BITS} key bits, got {key_bits}"
+            )));
+        }
+        self.record_pairs(rec, keys, values, len, key_bits, true)
+    }
+
+    /// `record` (`packed` false) or `record_packed`.
+    fn record_pairs(
+        &mut self,
+        rec: &mut Recorder<'_>,
+        keys: &wgpu::Buffer,
+        values: &wgpu::Buffer,
+        len: ItemCount<'_>,
+        key_bits: u32,
+        packed: bool,
+    ) -> Result<()> {
         if !(1..=64).contains(&key_bits) {
             return Err(Error::InvalidArgument(format!(
                 "radix sort key_bits must be 1..=64, got {key_bits}"
@@ -289,8 +358,10 @@ impl RadixSort {
         if passes % 2 == 1 {
             rec.encoder()
                 .copy_buffer_to_buffer(keys, 0, &scratch.keys, 0, key_bytes);
-            rec.encoder()
-                .copy_buffer_to_buffer(values, 0, &scratch.values, 0, value_bytes);
+            if !packed {
+                rec.encoder()
+                    .copy_buffer_to_buffer(values, 0, &scratch.values, 0, value_bytes);
+            }
             std::mem::swap(&mut src, &mut dst);
         }
         let mut pass = rec.pass("sort");
@@ -298,7 +369,7 @@ impl RadixSort {
         pass.dispatch(
             &kernels.histogram,
             tile_grid,
-            &SortParams::pass(len, num_tiles, key_bits, 0),
+            &SortParams::pass(len, num_tiles, key_bits, 0, packed),
             &[src.0, &counts[0], &counts[1], limit],
         );
         for p in 0..passes {
@@ -306,7 +377,7 @@ impl RadixSort {
             pass.dispatch(
                 &kernels.scatter,
                 tile_grid,
-                &SortParams::pass(len, num_tiles, key_bits, p),
+                &SortParams::pass(len, num_tiles, key_bits, p, packed),
                 &[
                     src.0,
                     src.1,
@@ -332,6 +403,30 @@ impl RadixSort {
         values: &[u32],
         key_bits: u32,
     ) -> Result<(Vec<[u32; 2]>, Vec<u32>)> {
+        self.upload_and_sort(ctx, keys, values, key_bits, false)
+    }
+
+    /// Like `sort_pairs` with the values uploaded in the keys' high words and sorted by
+    /// `record_packed` (the keys' own high words are dropped; tests).
+    pub fn sort_pairs_packed(
+        &mut self,
+        ctx: &GpuContext,
+        keys: &[[u32; 2]],
+        values: &[u32],
+        key_bits: u32,
+    ) -> Result<(Vec<[u32; 2]>, Vec<u32>)> {
+        let packed: Vec<[u32; 2]> = keys.iter().zip(values).map(|(k, &v)| [k[0], v]).collect();
+        self.upload_and_sort(ctx, &packed, values, key_bits, true)
+    }
+
+    fn upload_and_sort(
+        &mut self,
+        ctx: &GpuContext,
+        keys: &[[u32; 2]],
+        values: &[u32],
+        key_bits: u32,
+        packed: bool,
+    ) -> Result<(Vec<[u32; 2]>, Vec<u32>)> {
         if keys.len() != values.len() {
             return Err(Error::InvalidArgument(format!(
                 "{} keys but {} values",
@@ -342,17 +437,21 @@ impl RadixSort {
         let len = u32::try_from(keys.len())
             .map_err(|_| Error::InvalidArgument(format!("{} pairs to sort", keys.len())))?;
         let key_buffer = storage_buffer(ctx, "sort keys", keys)?;
-        let value_buffer = storage_buffer(ctx, "sort values", values)?;
+        // Packed, the values buffer only receives the sorted values.
+        let value_buffer = if packed {
+            storage_buffer_zeroed(ctx, "sort values", u64::from(len.max(1)) * 4)?
+        } else {
+            storage_buffer(ctx, "sort values", values)?
+        };
         let mut params = std::mem::replace(&mut self.params, ParamSlab::new(ctx));
         let result = {
             let mut rec = Recorder::new(ctx, &mut params, None);
-            let result = self.record(
-                &mut rec,
-                &key_buffer,
-                &value_buffer,
-                ItemCount::Known(len),
-                key_bits,
-            );
+            let count = ItemCount::Known(len);
+            let result = if packed {
+                self.record_packed(&mut rec, &key_buffer, &value_buffer, count, key_bits)
+            } else {
+                self.record(&mut rec, &key_buffer, &value_buffer, count, key_bits)
+            };
             rec.submit();
             result
         };

@@ -21,7 +21,7 @@ pub use triangles_bounds::{
 };
 
 use lbvh_climb::{ClimbBuffers, LbvhClimb};
-use morton_compute::MortonCompute;
+use morton_compute::{packs_values, MortonCompute};
 
 use super::Bvh;
 use crate::device::{Geometry, Tree};
@@ -270,7 +270,17 @@ impl LbvhBuilder {
         rec.submit();
         let scratch = self.scratch.as_ref().expect("reserved");
         let box_words: Vec<u32> = read_buffer(ctx, &scratch.centroid_box, 8)?;
-        let keys = read_keys(ctx, &scratch.keys, n)?;
+        // Keys that pack the indices hold them in their high words (`packs_values`): the sorted
+        // primitives show whether they were right.
+        let key_mask = if packs_values(self.morton.key_bits) {
+            u64::from(u32::MAX)
+        } else {
+            u64::MAX
+        };
+        let keys = read_keys(ctx, &scratch.keys, n)?
+            .into_iter()
+            .map(|k| k & key_mask)
+            .collect();
         let mut rec = Recorder::new(ctx, &mut params, None);
         self.record_sort(&mut rec, input.count(), &tree.prim_indices)?;
         self.record_climb(&mut rec, input.count(), &tree.nodes, &tree.prim_indices);
@@ -333,8 +343,13 @@ impl LbvhBuilder {
         order: &wgpu::Buffer,
     ) -> Result<()> {
         let scratch = self.scratch.as_ref().expect("reserved");
-        self.sort
-            .record(rec, &scratch.keys, order, count, self.morton.key_bits)
+        let key_bits = self.morton.key_bits;
+        if packs_values(key_bits) {
+            self.sort
+                .record_packed(rec, &scratch.keys, order, count, key_bits)
+        } else {
+            self.sort.record(rec, &scratch.keys, order, count, key_bits)
+        }
     }
 
     /// Stages 4-5: hierarchy and bounds into `nodes` in one climb (pass "hierarchy"). The

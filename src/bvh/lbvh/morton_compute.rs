@@ -10,6 +10,7 @@ use glam::Vec3;
 use crate::geometry::Aabb;
 use crate::gpu::constants::{MORTON_AXIS_BITS, MORTON_GRID};
 use crate::gpu::{kernel, ItemCount, Kernel, Pass};
+use crate::sort::PACKED_KEY_BITS;
 
 /// Bits of the full key: `MORTON_AXIS_BITS` per axis.
 pub const MORTON_BITS: u32 = 3 * MORTON_AXIS_BITS;
@@ -30,7 +31,8 @@ pub struct MortonParams {
     count: u32,
     row_pitch: u32,
     key_bits: u32,
-    _pad: u32,
+    /// 1: the index goes in the key's high word (`packs_values`), not in the values.
+    packed: u32,
 }
 const _: () = assert!(std::mem::size_of::<MortonParams>() == 16);
 
@@ -62,6 +64,12 @@ pub fn morton_keys_cpu(prim_boxes: &[Aabb], bounds: &Aabb, key_bits: u32) -> Vec
         .collect()
 }
 
+/// Whether keys of `key_bits` bits carry the sort's values (the indices) in their high words:
+/// keys of at most `sort::PACKED_KEY_BITS` bits, sorted by `RadixSort::record_packed`.
+pub fn packs_values(key_bits: u32) -> bool {
+    key_bits <= PACKED_KEY_BITS
+}
+
 /// The kernel `morton_compute`, and the width of the keys it writes.
 pub(crate) struct MortonCompute {
     kernel: Kernel<MortonParams>,
@@ -78,7 +86,8 @@ impl MortonCompute {
     }
 
     /// Records key computation over `count` primitive boxes: `keys[i]` (as `[lo, hi]`, the high
-    /// `key_bits` of the full key) and `values[i] = i` (the permutation the sort reorders).
+    /// `key_bits` of the full key) and `values[i] = i` (the permutation the sort reorders), or,
+    /// where the keys pack the values (`packs_values`), `keys[i] = [key, i]`.
     pub fn record(
         &self,
         pass: &mut Pass<'_>,
@@ -93,7 +102,7 @@ impl MortonCompute {
             count: count.capacity(),
             row_pitch: grid.row_pitch,
             key_bits: self.key_bits,
-            _pad: 0,
+            packed: u32::from(packs_values(self.key_bits)),
         };
         pass.dispatch(
             &self.kernel,
