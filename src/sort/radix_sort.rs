@@ -283,7 +283,8 @@ impl RadixSort {
     /// the values (`keys[i] = [key, value]`; `values` is not read): the passes move each pair as
     /// one word, and the sorted pairs end as `record` leaves them, the keys in `keys` with high
     /// words of 0 and the values in `values`. Pairs past a count computed on the GPU are left as
-    /// they are (packed).
+    /// they are (packed), except in a sort of one pair, which buffer copies unpack whatever the
+    /// count (so the buffers need `COPY_DST` usage too).
     pub fn record_packed(
         &mut self,
         rec: &mut Recorder<'_>,
@@ -328,6 +329,11 @@ impl RadixSort {
             )));
         }
         if len <= 1 {
+            if packed && len == 1 {
+                // No pass to unpack the one pair: copies do (a pair past a count of 0 too).
+                rec.encoder().copy_buffer_to_buffer(keys, 4, values, 0, 4);
+                rec.encoder().clear_buffer(keys, 4, Some(4));
+            }
             rec.pass("sort");
             return Ok(());
         }
@@ -437,9 +443,10 @@ impl RadixSort {
         let len = u32::try_from(keys.len())
             .map_err(|_| Error::InvalidArgument(format!("{} pairs to sort", keys.len())))?;
         let key_buffer = storage_buffer(ctx, "sort keys", keys)?;
-        // Packed, the values buffer only receives the sorted values.
+        // Packed, the values buffer only receives the sorted values: it starts with words no value
+        // has, so that each must come from the keys.
         let value_buffer = if packed {
-            storage_buffer_zeroed(ctx, "sort values", u64::from(len.max(1)) * 4)?
+            storage_buffer(ctx, "sort values", &vec![u32::MAX; keys.len().max(1)])?
         } else {
             storage_buffer(ctx, "sort values", values)?
         };
