@@ -75,6 +75,9 @@ impl BuildSchedule {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TuningSpace {
     pub round_levels: Option<u32>,
+    /// The rounds' default level dispatches differ (on CPU devices they depend on each round's
+    /// γ): `round_levels` is round 1's, and a count equal to it is not the default in effect.
+    pub round_levels_vary: bool,
     /// The reach the overlapped rounds take (`treelet::overlap_reach` of the treelet size).
     pub overlap_reach: u32,
     pub sort_tile_items: u32,
@@ -281,6 +284,9 @@ impl Dimension {
             Dimension::Dp => ra.dp() == rb.dp(),
             Dimension::ClimbDp => ra.climb_dp() == rb.climb_dp(),
             Dimension::TeamBelow => ra.team_below() == rb.team_below(),
+            Dimension::LevelDispatches if space.round_levels_vary => {
+                ra.level_dispatches == rb.level_dispatches
+            }
             Dimension::LevelDispatches => same_count(
                 ra.level_dispatches,
                 rb.level_dispatches,
@@ -327,7 +333,9 @@ fn without_defaults(schedule: BuildSchedule, space: &TuningSpace) -> BuildSchedu
     let round_levels = space.round_levels.unwrap_or(0);
     BuildSchedule {
         rounds: RoundSchedule {
-            level_dispatches: r.level_dispatches.filter(|&l| l != round_levels),
+            level_dispatches: r
+                .level_dispatches
+                .filter(|&l| space.round_levels_vary || l != round_levels),
             team_below: r
                 .team_below
                 .filter(|&t| t != RoundSchedule::default().team_below()),
@@ -606,6 +614,7 @@ mod tests {
     /// tile) and 20 (wide level dispatches).
     const SPACE: TuningSpace = TuningSpace {
         round_levels: Some(14),
+        round_levels_vary: false,
         overlap_reach: 6,
         sort_tile_items: 8,
         wide_levels: Some(20),
@@ -695,6 +704,7 @@ mod tests {
         // An LBVH in the binary layout: the sort tile alone.
         let space = TuningSpace {
             round_levels: None,
+            round_levels_vary: false,
             overlap_reach: 0,
             sort_tile_items: 8,
             wide_levels: None,
@@ -712,6 +722,28 @@ mod tests {
         // against 16 in the second descent (the pair 16 against 32 is not timed again).
         assert_eq!(tuned.trials.len(), 3);
         assert_eq!(tuned.schedule.sort_tile_items, Some(16));
+    }
+
+    /// Where the rounds' defaults differ (CPU devices), a count equal to round 1's default is a
+    /// schedule of its own: not the default, not labelled as it, and not set back to it.
+    #[test]
+    fn a_count_is_the_default_only_where_every_round_has_it() {
+        let explicit = BuildSchedule {
+            rounds: RoundSchedule {
+                level_dispatches: Some(14),
+                ..RoundSchedule::default()
+            },
+            ..BuildSchedule::default()
+        };
+        let vary = TuningSpace {
+            round_levels_vary: true,
+            ..SPACE
+        };
+        assert!(same_in_effect(explicit, BuildSchedule::default(), &SPACE));
+        assert_eq!(without_defaults(explicit, &SPACE), BuildSchedule::default());
+        assert!(!same_in_effect(explicit, BuildSchedule::default(), &vary));
+        assert_eq!(without_defaults(explicit, &vary), explicit);
+        assert_eq!(without_defaults(explicit, &vary).label(), "d=14");
     }
 
     #[test]

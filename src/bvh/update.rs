@@ -251,17 +251,23 @@ impl TreeUpdater {
         let device = ctx.info.device_type;
         // The stages' sizes (the references of pre-splitting where the builder splits) and the
         // treelet rounds' level dispatches.
-        let (prims, round_levels, overlap_reach) = match &self.producer {
+        let (prims, round_levels, round_levels_vary, overlap_reach) = match &self.producer {
             Producer::Trbvh(b) => {
                 let prims = b.leaf_capacity(triangles);
-                let gamma = b.settings.treelet_size;
-                let levels = RoundSchedule::default_level_dispatches(prims, gamma, device);
-                (prims, Some(levels), overlap_reach(gamma))
+                let size = b.settings.treelet_size;
+                let levels = RoundSchedule::default_level_dispatches(prims, size, device);
+                // Each round's default (a cost-only pass has no levels).
+                let vary = b.settings.gammas().iter().any(|&gamma| {
+                    gamma != u32::MAX
+                        && RoundSchedule::default_level_dispatches(prims, gamma, device) != levels
+                });
+                (prims, Some(levels), vary, overlap_reach(size))
             }
-            _ => (triangles, None, 0),
+            _ => (triangles, None, false, 0),
         };
         Some(TuningSpace {
             round_levels,
+            round_levels_vary,
             overlap_reach,
             sort_tile_items: context_tile_items(ctx, prims),
             wide_levels: self
