@@ -28,10 +28,10 @@
 // adds into `next_counts`, which the dispatch before zeroed, and zeroes its tile's words of
 // `cleared_counts`, into which the scatter after it adds.
 // Values (`params.pairs`): in `values_in`, moved to `values_out` beside the keys
-// (PAIRS_SEPARATE); or in the keys' high words, which a sort of at most 32 bits never reads as
-// digits (`RadixSort::record_packed`): each pair then moves as one 8-byte store (PAIRS_PACKED),
-// and the last pass writes the key with a high word of 0 and the value to `values_out`
-// (PAIRS_UNPACK), so the sorted buffers are those of the separate form.
+// (PAIRS_SEPARATE); or above the low `params.key_bits` bits of the keys, which the sort never
+// reads as digits (`RadixSort::record_packed`): each pair then moves as one 8-byte store
+// (PAIRS_PACKED), and the last pass writes the key with the bits above cleared and the value to
+// `values_out` (PAIRS_UNPACK), so the sorted buffers are those of the separate form.
 // 11 KiB of workgroup memory; no subgroup operations.
 // Tiles are linear workgroup indices over a 1D or 2D grid: wid.x + wid.y * num_workgroups.x.
 // Tile geometry, parameters and digit counting are shared with keys_histogram.wgsl
@@ -53,6 +53,21 @@
 const PAIRS_SEPARATE: u32 = 0u;
 const PAIRS_PACKED: u32 = 1u;
 const PAIRS_UNPACK: u32 = 2u;
+
+// A packed key's sorted bits (the bits above cleared) and its value (the 32 bits above them).
+struct Unpacked {
+    key: vec2<u32>,
+    value: u32,
+}
+
+fn unpack(key: vec2<u32>) -> Unpacked {
+    let bits = params.key_bits;
+    if bits >= 32u {
+        let high = bits - 32u;
+        return Unpacked(vec2<u32>(key.x, key.y & ((1u << high) - 1u)), key.y >> high);
+    }
+    return Unpacked(vec2<u32>(key.x & ((1u << bits) - 1u), 0u), (key.x >> bits) | (key.y << (32u - bits)));
+}
 
 // Component i of v, with selects (dynamic indexing is slow on some drivers).
 fn pick(v: vec4<u32>, i: u32) -> u32 {
@@ -177,8 +192,9 @@ fn main(
             } else if params.pairs == PAIRS_PACKED {
                 keys_out[dest] = key;
             } else {
-                keys_out[dest] = vec2<u32>(key.x, 0u);
-                values_out[dest] = key.y;
+                let pair = unpack(key);
+                keys_out[dest] = pair.key;
+                values_out[dest] = pair.value;
             }
             if gather_next {
                 let second_tile = dest / size - tile_offsets[d] / size;

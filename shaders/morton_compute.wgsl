@@ -3,8 +3,8 @@
 // of MORTON_GRID (2^21) cells per axis; the full key interleaves the high MORTON_AXIS_BITS (16) bits
 // of each axis (48 bits: bit 3k+2 holds x's kept bit k, 3k+1 y's, 3k z's), and the kernel writes its
 // high `params.key_bits` bits. The grid is cubic (cell size from the longest side), so thin axes do
-// not waste top-level splits. Keys are vec2<u32>(low 32 bits, high 32 bits); keys of at most 32
-// bits can carry the sort's value (the index) in their high word instead (`params.packed`).
+// not waste top-level splits. Keys are vec2<u32>(low 32 bits, high 32 bits); they can carry the
+// sort's value (the index) above their bits instead (`params.packed`).
 #include "constants.wgsl"
 #include "box_words.wgsl"
 
@@ -14,8 +14,8 @@ struct MortonParams {
     row_pitch: u32,
     // 1..=48: the high bits of the full key that the key keeps.
     key_bits: u32,
-    // 1: the index goes in the key's high word, not in `values` (keys of at most 32 bits, sorted
-    // by `RadixSort::record_packed`); 0: the key's high word is its own.
+    // 1: the index goes above the key's bits, not in `values` (`sort::packs_indices`, sorted by
+    // `RadixSort::record_packed`); 0: in `values`.
     packed: u32,
 }
 
@@ -63,7 +63,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         key = vec2<u32>((key.x >> drop) | (key.y << (32u - drop)), key.y >> drop);
     }
     if params.packed != 0u {
-        keys[i] = vec2<u32>(key.x, i);
+        let bits = params.key_bits;
+        if bits >= 32u {
+            key.y |= i << (bits - 32u);
+        } else {
+            key = vec2<u32>(key.x | (i << bits), i >> (32u - bits));
+        }
+        keys[i] = key;
     } else {
         keys[i] = key;
         values[i] = i;

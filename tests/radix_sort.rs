@@ -1,13 +1,13 @@
 //! The GPU radix sort (`sort::RadixSort`) and its CPU twin against `sort_unstable` on
-//! (key, value) pairs with values 0..n: equal results mean sorted by key and stable. Sorts of at
-//! most 32 bits run with the values in the keys' high words too (`record_packed`).
+//! (key, value) pairs with values 0..n: equal results mean sorted by key and stable. Sorts whose
+//! values fit above the key bits run with them there too (`record_packed`).
 
 mod common;
 
 use common::{gpu, rng};
 use rand::Rng;
 use treelet::gpu::{ItemCount, ParamSlab, Recorder};
-use treelet::sort::{sort_pairs_cpu, RadixSort, PACKED_KEY_BITS, SORT_TILE_ITEMS};
+use treelet::sort::{packs_indices, sort_pairs_cpu, RadixSort, SORT_TILE_ITEMS};
 
 /// The largest tile: 256 invocations of 32 keys.
 const SORT_TILE: usize = 256 * 32;
@@ -39,18 +39,26 @@ fn expected(keys: &[u64], key_bits: u32) -> (Vec<u64>, Vec<u32>) {
     pairs.into_iter().map(|(_, v, k)| (k, v)).unzip()
 }
 
-/// Sorts with the GPU and the CPU twin and compares both with `expected`; with at most 32 key bits
-/// also with the values in the keys' high words (`sort_pairs_packed`), whose sorted keys are the
-/// low words with high words of 0.
+/// The low `key_bits` bits.
+fn low_bits(key: u64, key_bits: u32) -> u64 {
+    key & (u64::MAX >> (64 - key_bits))
+}
+
+/// Sorts with the GPU and the CPU twin and compares both with `expected`; where the values fit
+/// above the key bits, also with them there (`sort_pairs_packed`), whose sorted keys are the key
+/// bits alone.
 fn check(sorter: &mut RadixSort, keys: &[u64], key_bits: u32) {
-    if key_bits <= PACKED_KEY_BITS {
+    if packs_indices(key_bits, keys.len() as u32) {
         let values: Vec<u32> = (0..keys.len() as u32).collect();
         let (want_keys, want_values) = expected(keys, key_bits);
         let gpu_keys: Vec<[u32; 2]> = keys.iter().map(|&k| split(k)).collect();
         let (got_keys, got_values) = sorter
             .sort_pairs_packed(gpu(), &gpu_keys, &values, key_bits)
             .unwrap();
-        let want_keys: Vec<[u32; 2]> = want_keys.iter().map(|&k| [k as u32, 0]).collect();
+        let want_keys: Vec<[u32; 2]> = want_keys
+            .iter()
+            .map(|&k| split(low_bits(k, key_bits)))
+            .collect();
         assert!(
             got_keys == want_keys && got_values == want_values,
             "packed GPU sort of n = {} with key_bits = {key_bits}",
@@ -175,7 +183,7 @@ fn duplicate_keys() {
 #[test]
 fn key_widths() {
     let mut sorter = RadixSort::new(gpu());
-    // No pass or one pair: packed, the sort unpacks it by buffer copies.
+    // No pair, and one: packed, the passes run to unpack it.
     check(&mut sorter, &random_keys(0, 32, 46), 32);
     check(&mut sorter, &random_keys(1, 32, 47), 32);
     check(&mut sorter, &random_keys(2, 32, 48), 32);
@@ -254,8 +262,11 @@ fn invalid_arguments_are_errors() {
     assert!(sorter.sort_pairs(ctx, &[[0, 0]], &[0], 0).is_err());
     assert!(sorter.sort_pairs(ctx, &[[0, 0]], &[0], 65).is_err());
     assert!(sorter.sort_pairs(ctx, &[[0, 0]], &[0, 1], 8).is_err());
-    // The values in the keys' high words leave at most 32 bits to sort.
-    assert!(sorter.sort_pairs_packed(ctx, &[[0, 0]], &[0], 33).is_err());
+    // Values must fit above the key bits.
+    assert!(sorter.sort_pairs_packed(ctx, &[[0, 0]], &[0], 64).is_err());
+    assert!(sorter
+        .sort_pairs_packed(ctx, &[[0, 0], [0, 0]], &[0, 1 << 20], 44)
+        .is_err());
 }
 
 #[test]
@@ -282,17 +293,28 @@ fn cpu_twin_matches_sort_unstable() {
 fn a_count_on_the_gpu_sorts_only_its_pairs() {
     let ctx = gpu();
     let mut sorter = RadixSort::new(ctx);
-    for (capacity, count, bits) in [(40_000usize, 29_999usize, 63), (9000, 8192, 32), (5, 2, 63)] {
+    for (capacity, count, bits) in [
+        (40_000usize, 29_999usize, 63),
+        (9000, 8192, 32),
+        (9000, 7000, 44),
+        (5, 2, 63),
+    ] {
         let keys = random_keys(capacity, bits, capacity as u64);
         let values: Vec<u32> = (0..capacity as u32).collect();
         for packed in [false, true] {
-            if packed && bits > PACKED_KEY_BITS {
+            if packed && !packs_indices(bits, capacity as u32) {
                 continue;
             }
             let split_keys: Vec<[u32; 2]> = keys
                 .iter()
                 .zip(&values)
-                .map(|(&k, &v)| if packed { [k as u32, v] } else { split(k) })
+                .map(|(&k, &v)| {
+                    if packed {
+                        split(low_bits(k, bits) | (u64::from(v) << bits))
+                    } else {
+                        split(k)
+                    }
+                })
                 .collect();
             // Packed, the values buffer starts with other words: past the count they stay.
             let start_values: Vec<u32> = if packed {

@@ -10,7 +10,8 @@ override TILE_ITEMS: u32 = 32u;
 
 // The pass's digit: `bits` bits from bit `shift`; the next pass's digit, whose counts the pass
 // gathers: `next_bits` (0 after the last pass) bits from `next_shift`; where the values are
-// (`pairs`: PAIRS_SEPARATE, PAIRS_PACKED or PAIRS_UNPACK, keys_scatter.wgsl).
+// (`pairs`: PAIRS_SEPARATE, PAIRS_PACKED or PAIRS_UNPACK, keys_scatter.wgsl) and the sorted bits
+// (`key_bits`), above which packed values sit.
 struct SortParams {
     n: u32,
     num_tiles: u32,
@@ -19,7 +20,7 @@ struct SortParams {
     next_shift: u32,
     next_bits: u32,
     pairs: u32,
-    pad: u32,
+    key_bits: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: SortParams;

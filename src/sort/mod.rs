@@ -17,6 +17,6 @@ pub use keys_histogram::KEYS_HISTOGRAM;
 pub use keys_scatter::KEYS_SCATTER;
 pub use prefix_scan::{scan_blocks, PrefixScan};
 pub use radix_sort::{
-    check_tile_items, context_tile_items, sort_pairs_cpu, tile_items, RadixSort, PACKED_KEY_BITS,
+    check_tile_items, context_tile_items, packs_indices, sort_pairs_cpu, tile_items, RadixSort,
     RADIX_BITS, SORT_TILE_ITEMS,
 };

@@ -25,11 +25,12 @@
 //! field:2000's sort 7.47 -> 9.45 ms, conference's 0.24 -> 0.33 ms; README, "On an NVIDIA H200,
 //! second session"), and 1.7-3.5x on lavapipe, so they were taken out.
 //!
-//! Values beside the keys, or in them: a sort of at most 32 key bits can take its values in the
-//! keys' high words, which it never reads as digits (`record_packed`; the LBVH's Morton keys of
-//! the treelet builders): every pass but the last then moves each pair as one 8-byte word, where
-//! the separate form reads and scatters 12 bytes in two stores (one memory sector each on a GPU),
-//! and the last pass writes keys and values apart, as the separate form leaves them.
+//! Values beside the keys, or in them: where the values are small enough to fit above the sorted
+//! key bits in 64, a sort can take them there, in bits it never reads as digits (`record_packed`;
+//! the LBVH's Morton keys with their indices, `packs_indices`): every pass but the last then
+//! moves each pair as one 8-byte word, where the separate form reads and scatters 12 bytes in two
+//! stores (one memory sector each on a GPU), and the last pass writes keys and values apart, as
+//! the separate form leaves them.
 //!
 //! Digit width: 4 bits, measured about 2.5x faster on the software driver (lavapipe, 2 cores,
 //! 1M pairs, 63-bit keys: about 0.14 s) than 8-bit digits ranked by workgroup-memory "ballots"
@@ -120,14 +121,15 @@ pub struct SortParams {
     next_shift: u32,
     next_bits: u32,
     pairs: u32,
-    _pad: u32,
+    /// The sorted bits, above which packed values sit.
+    key_bits: u32,
 }
 const _: () = assert!(std::mem::size_of::<SortParams>() == 32);
 
 impl SortParams {
     /// Pass `pass` of a sort of `len` pairs in `num_tiles` tiles by the low `key_bits` bits,
-    /// with values as `packed` says (`record_packed`): in the keys' high words, unpacked by the
-    /// last pass.
+    /// with values as `packed` says (`record_packed`): above the key bits, unpacked by the last
+    /// pass.
     fn pass(len: u32, num_tiles: u32, key_bits: u32, pass: u32, packed: bool) -> Self {
         let shift = pass * RADIX_BITS;
         let next_shift = shift + RADIX_BITS;
@@ -144,13 +146,16 @@ impl SortParams {
             next_shift,
             next_bits: RADIX_BITS.min(key_bits.saturating_sub(next_shift)),
             pairs: pairs as u32,
-            _pad: 0,
+            key_bits,
         }
     }
 }
 
-/// The most key bits a sort with its values in the keys' high words sorts (`record_packed`).
-pub const PACKED_KEY_BITS: u32 = 32;
+/// Whether `len` pairs whose values are indices below `len` fit keys of `key_bits` bits with the
+/// values above them in 64 bits (`record_packed`).
+pub fn packs_indices(key_bits: u32, len: u32) -> bool {
+    (1..64).contains(&key_bits) && u64::from(len.saturating_sub(1)) >> (64 - key_bits) == 0
+}
 
 /// Number of passes for `key_bits` sorted bits.
 fn pass_count(key_bits: u32) -> u32 {
@@ -279,12 +284,12 @@ impl RadixSort {
         self.record_pairs(rec, keys, values, len, key_bits, false)
     }
 
-    /// Like `record`, for keys of at most `PACKED_KEY_BITS` (1..=32) bits whose high words hold
-    /// the values (`keys[i] = [key, value]`; `values` is not read): the passes move each pair as
-    /// one word, and the sorted pairs end as `record` leaves them, the keys in `keys` with high
-    /// words of 0 and the values in `values`. Pairs past a count computed on the GPU are left as
-    /// they are (packed), except in a sort of one pair, which buffer copies unpack whatever the
-    /// count (so the buffers need `COPY_DST` usage too).
+    /// Like `record`, for keys of `key_bits` (1..=63) bits with the values above them: `keys[i]`
+    /// holds key | value << key_bits (64 bits, low word first), the values below 2^(64 −
+    /// key_bits) (`packs_indices`; `values` is not read). The passes move each pair as one word,
+    /// and the sorted pairs end as `record` leaves them: the keys in `keys`, the bits above
+    /// `key_bits` cleared, and the values in `values`. Pairs past a count computed on the GPU are
+    /// left as they are (packed); one pair runs the passes too, which unpack it.
     pub fn record_packed(
         &mut self,
         rec: &mut Recorder<'_>,
@@ -293,10 +298,10 @@ impl RadixSort {
         len: ItemCount<'_>,
         key_bits: u32,
     ) -> Result<()> {
-        if key_bits > PACKED_KEY_BITS {
+        if key_bits >= 64 {
             return Err(Error::InvalidArgument(format!(
-                "a radix sort with the values in the keys' high words sorts at most \
-                 {PACKED_KEY_BITS} key bits, got {key_bits}"
+                "a radix sort with the values above the keys sorts at most 63 key bits, got \
+                 {key_bits}"
             )));
         }
         self.record_pairs(rec, keys, values, len, key_bits, true)
@@ -328,12 +333,8 @@ impl RadixSort {
                 values.size()
             )));
         }
-        if len <= 1 {
-            if packed && len == 1 {
-                // No pass to unpack the one pair: copies do (a pair past a count of 0 too).
-                rec.encoder().copy_buffer_to_buffer(keys, 4, values, 0, 4);
-                rec.encoder().clear_buffer(keys, 4, Some(4));
-            }
+        // One pair is sorted, but a packed one needs the passes to unpack it.
+        if len == 0 || (len == 1 && !packed) {
             rec.pass("sort");
             return Ok(());
         }
@@ -412,8 +413,9 @@ impl RadixSort {
         self.upload_and_sort(ctx, keys, values, key_bits, false)
     }
 
-    /// Like `sort_pairs` with the values uploaded in the keys' high words and sorted by
-    /// `record_packed` (the keys' own high words are dropped; tests).
+    /// Like `sort_pairs` with the values uploaded above the low `key_bits` (1..=63) bits of the
+    /// keys, whose own bits there are dropped, and sorted by `record_packed` (tests). Fails when a
+    /// value does not fit.
     pub fn sort_pairs_packed(
         &mut self,
         ctx: &GpuContext,
@@ -421,7 +423,23 @@ impl RadixSort {
         values: &[u32],
         key_bits: u32,
     ) -> Result<(Vec<[u32; 2]>, Vec<u32>)> {
-        let packed: Vec<[u32; 2]> = keys.iter().zip(values).map(|(k, &v)| [k[0], v]).collect();
+        if !(1..64).contains(&key_bits)
+            || values.iter().any(|&v| u64::from(v) >> (64 - key_bits) != 0)
+        {
+            return Err(Error::InvalidArgument(format!(
+                "values above keys of {key_bits} bits do not fit in 64 bits"
+            )));
+        }
+        let packed: Vec<[u32; 2]> = keys
+            .iter()
+            .zip(values)
+            .map(|(k, &v)| {
+                let key =
+                    (u64::from(k[0]) | (u64::from(k[1]) << 32)) & (u64::MAX >> (64 - key_bits));
+                let word = key | (u64::from(v) << key_bits);
+                [word as u32, (word >> 32) as u32]
+            })
+            .collect();
         self.upload_and_sort(ctx, &packed, values, key_bits, true)
     }
 

@@ -21,7 +21,7 @@ pub use triangles_bounds::{
 };
 
 use lbvh_climb::{ClimbBuffers, LbvhClimb};
-use morton_compute::{packs_values, MortonCompute};
+use morton_compute::MortonCompute;
 
 use super::Bvh;
 use crate::device::{Geometry, Tree};
@@ -270,10 +270,10 @@ impl LbvhBuilder {
         rec.submit();
         let scratch = self.scratch.as_ref().expect("reserved");
         let box_words: Vec<u32> = read_buffer(ctx, &scratch.centroid_box, 8)?;
-        // Keys that pack the indices hold them in their high words (`packs_values`): the sorted
-        // primitives show whether they were right.
-        let key_mask = if packs_values(self.morton.key_bits) {
-            u64::from(u32::MAX)
+        // Keys that pack the indices hold them above their bits: the sorted primitives show
+        // whether they were right.
+        let key_mask = if self.morton.packs_indices(n) {
+            u64::MAX >> (64 - self.morton.key_bits)
         } else {
             u64::MAX
         };
@@ -344,7 +344,7 @@ impl LbvhBuilder {
     ) -> Result<()> {
         let scratch = self.scratch.as_ref().expect("reserved");
         let key_bits = self.morton.key_bits;
-        if packs_values(key_bits) {
+        if self.morton.packs_indices(count.capacity()) {
             self.sort
                 .record_packed(rec, &scratch.keys, order, count, key_bits)
         } else {

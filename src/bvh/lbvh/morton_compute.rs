@@ -10,7 +10,7 @@ use glam::Vec3;
 use crate::geometry::Aabb;
 use crate::gpu::constants::{MORTON_AXIS_BITS, MORTON_GRID};
 use crate::gpu::{kernel, ItemCount, Kernel, Pass};
-use crate::sort::PACKED_KEY_BITS;
+use crate::sort::packs_indices;
 
 /// Bits of the full key: `MORTON_AXIS_BITS` per axis.
 pub const MORTON_BITS: u32 = 3 * MORTON_AXIS_BITS;
@@ -31,7 +31,7 @@ pub struct MortonParams {
     count: u32,
     row_pitch: u32,
     key_bits: u32,
-    /// 1: the index goes in the key's high word (`packs_values`), not in the values.
+    /// 1: the index goes above the key's bits (`sort::packs_indices`), not in the values.
     packed: u32,
 }
 const _: () = assert!(std::mem::size_of::<MortonParams>() == 16);
@@ -64,12 +64,6 @@ pub fn morton_keys_cpu(prim_boxes: &[Aabb], bounds: &Aabb, key_bits: u32) -> Vec
         .collect()
 }
 
-/// Whether keys of `key_bits` bits carry the sort's values (the indices) in their high words:
-/// keys of at most `sort::PACKED_KEY_BITS` bits, sorted by `RadixSort::record_packed`.
-pub fn packs_values(key_bits: u32) -> bool {
-    key_bits <= PACKED_KEY_BITS
-}
-
 /// The kernel `morton_compute`, and the width of the keys it writes.
 pub(crate) struct MortonCompute {
     kernel: Kernel<MortonParams>,
@@ -85,9 +79,16 @@ impl MortonCompute {
         }
     }
 
+    /// Whether the keys of `capacity` primitives carry their indices (`sort::packs_indices`):
+    /// where the values fit above the key bits, the sort moves each pair as one word.
+    pub fn packs_indices(&self, capacity: u32) -> bool {
+        packs_indices(self.key_bits, capacity)
+    }
+
     /// Records key computation over `count` primitive boxes: `keys[i]` (as `[lo, hi]`, the high
     /// `key_bits` of the full key) and `values[i] = i` (the permutation the sort reorders), or,
-    /// where the keys pack the values (`packs_values`), `keys[i] = [key, i]`.
+    /// where they pack the indices (`packs_indices` of the capacity), `keys[i]` = key | i <<
+    /// key_bits (the sort's `record_packed` form).
     pub fn record(
         &self,
         pass: &mut Pass<'_>,
@@ -102,7 +103,7 @@ impl MortonCompute {
             count: count.capacity(),
             row_pitch: grid.row_pitch,
             key_bits: self.key_bits,
-            packed: u32::from(packs_values(self.key_bits)),
+            packed: u32::from(self.packs_indices(count.capacity())),
         };
         pass.dispatch(
             &self.kernel,
