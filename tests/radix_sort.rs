@@ -287,7 +287,7 @@ fn cpu_twin_matches_sort_unstable() {
 
 /// A pair count computed on the GPU (here written by a buffer copy in the same recording): the
 /// passes are sized for the capacity, the first `count` pairs end sorted and the pairs past them
-/// are left as they are; also with the values in the keys' high words (at most 32 bits), whose
+/// are left as they are; also with the values above the key bits (where they fit), whose
 /// pairs past the count stay packed.
 #[test]
 fn a_count_on_the_gpu_sorts_only_its_pairs() {

@@ -102,9 +102,9 @@ pub fn tile_items(len: u32, device: wgpu::DeviceType) -> u32 {
 enum Pairs {
     /// In the values buffers, moved beside the keys.
     Separate = 0,
-    /// In the keys' high words, moved with them.
+    /// Above the key bits, moved with the keys.
     Packed = 1,
-    /// In the keys' high words, written to the values buffer (the keys' high words become 0).
+    /// Above the key bits, written to the values buffer (the keys keep their key bits alone).
     Unpack = 2,
 }
 
