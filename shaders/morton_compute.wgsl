@@ -62,16 +62,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     } else if drop > 0u {
         key = vec2<u32>((key.x >> drop) | (key.y << (32u - drop)), key.y >> drop);
     }
-    if params.packed != 0u {
-        let bits = params.key_bits;
-        if bits >= 32u {
-            key.y |= i << (bits - 32u);
-        } else {
-            key = vec2<u32>(key.x | (i << bits), i >> (32u - bits));
-        }
-        keys[i] = key;
-    } else {
-        keys[i] = key;
+    let bits = params.key_bits;
+    if params.packed == 0u {
         values[i] = i;
+    } else if bits >= 32u {
+        key.y |= i << (bits - 32u);
+    } else {
+        key = vec2<u32>(key.x | (i << bits), i >> (32u - bits));
     }
+    keys[i] = key;
 }

@@ -162,6 +162,22 @@ const WIDE_NUMBERING_WORDS: u32 = (1 << 4) | (1 << 5);
 const _: () = assert!(std::mem::offset_of!(WideNode, child_base) == 16);
 const _: () = assert!(std::mem::offset_of!(WideNode, prim_base) == 20);
 
+/// What is hashed of a binary tree of `nodes` nodes and `prims` references: the node words in
+/// order, then the references in order.
+fn binary_parts(nodes: u32, prims: u32) -> [WordsHash; 2] {
+    let node_words = nodes * (std::mem::size_of::<BvhNode>() / 4) as u32;
+    [WordsHash::in_order(node_words), WordsHash::in_order(prims)]
+}
+
+/// What is hashed of a wide layout of `nodes` nodes and `prims` references: the nodes as a
+/// multiset without their numbering words, then the references as a multiset.
+fn wide_parts(nodes: u32, prims: u32) -> [WordsHash; 2] {
+    [
+        WordsHash::records(nodes, WIDE_NODE_WORDS, WIDE_NUMBERING_WORDS),
+        WordsHash::records(prims, 1, 0),
+    ]
+}
+
 /// A tree's fingerprint (see the module header).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct TreeFingerprint {
@@ -176,20 +192,20 @@ impl TreeFingerprint {
     /// `tree`'s fingerprint; blocks until the GPU is done.
     pub fn of(ctx: &GpuContext, hasher: &mut WordsHasher, tree: &Tree) -> Result<Self> {
         let (nodes, prims) = tree.counts(ctx)?;
-        let node_words = nodes * (std::mem::size_of::<BvhNode>() / 4) as u32;
+        let [node_words, prim_words] = binary_parts(nodes, prims);
         let binary = (
             [nodes, prims],
-            hasher.hash(ctx, &tree.nodes, WordsHash::in_order(node_words))?,
-            hasher.hash(ctx, &tree.prim_indices, WordsHash::in_order(prims))?,
+            hasher.hash(ctx, &tree.nodes, node_words)?,
+            hasher.hash(ctx, &tree.prim_indices, prim_words)?,
         );
         let wide = match &tree.wide {
             Some(wide) => {
                 let (nodes, prims) = wide.counts(ctx)?;
-                let what = WordsHash::records(nodes, WIDE_NODE_WORDS, WIDE_NUMBERING_WORDS);
+                let [node_words, prim_words] = wide_parts(nodes, prims);
                 Some((
                     [nodes, prims],
-                    hasher.hash(ctx, &wide.nodes, what)?,
-                    hasher.hash(ctx, &wide.prim_indices, WordsHash::records(prims, 1, 0))?,
+                    hasher.hash(ctx, &wide.nodes, node_words)?,
+                    hasher.hash(ctx, &wide.prim_indices, prim_words)?,
                 ))
             }
             None => None,
@@ -199,25 +215,20 @@ impl TreeFingerprint {
 
     /// CPU twin of [`TreeFingerprint::of`] for trees read back or built on the CPU.
     pub fn of_cpu(bvh: &Bvh, wide: Option<&WideBvh>) -> Self {
-        let node_words: &[u32] = bytemuck::cast_slice(&bvh.nodes);
+        let counts = [bvh.nodes.len() as u32, bvh.prim_indices.len() as u32];
+        let [node_words, prim_words] = binary_parts(counts[0], counts[1]);
         let binary = (
-            [bvh.nodes.len() as u32, bvh.prim_indices.len() as u32],
-            words_hash_cpu(node_words, WordsHash::in_order(node_words.len() as u32)),
-            words_hash_cpu(
-                &bvh.prim_indices,
-                WordsHash::in_order(bvh.prim_indices.len() as u32),
-            ),
+            counts,
+            words_hash_cpu(bytemuck::cast_slice(&bvh.nodes), node_words),
+            words_hash_cpu(&bvh.prim_indices, prim_words),
         );
         let wide = wide.map(|wide| {
-            let nodes = wide.nodes.len() as u32;
-            let what = WordsHash::records(nodes, WIDE_NODE_WORDS, WIDE_NUMBERING_WORDS);
+            let counts = [wide.nodes.len() as u32, wide.prim_indices.len() as u32];
+            let [node_words, prim_words] = wide_parts(counts[0], counts[1]);
             (
-                [nodes, wide.prim_indices.len() as u32],
-                words_hash_cpu(bytemuck::cast_slice(&wide.nodes), what),
-                words_hash_cpu(
-                    &wide.prim_indices,
-                    WordsHash::records(wide.prim_indices.len() as u32, 1, 0),
-                ),
+                counts,
+                words_hash_cpu(bytemuck::cast_slice(&wide.nodes), node_words),
+                words_hash_cpu(&wide.prim_indices, prim_words),
             )
         });
         Self { binary, wide }
