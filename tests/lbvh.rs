@@ -10,7 +10,8 @@ use glam::Vec3;
 use rand::Rng;
 use treelet::bvh::lbvh::{
     assemble_lbvh_cpu, build_lbvh_from_boxes_cpu, centroid_bounds_cpu, hierarchy_cpu,
-    morton_keys_cpu, prim_boxes_cpu, LbvhBuilder, LBVH_KEY_BITS, MORTON_BITS, TRBVH_KEY_BITS,
+    morton_keys_cpu, prim_boxes_cpu, KeyWidth, LbvhBuilder, LBVH_KEY_BITS, MORTON_BITS,
+    TRBVH_KEY_BITS,
 };
 use treelet::bvh::{sah_cost, validate, Bvh, SahParams};
 use treelet::device::{Geometry, Tree};
@@ -76,19 +77,25 @@ fn assert_sah_close_to_cpu_twin(bvh: &Bvh, triangles: &[Triangle], key_bits: u32
 /// - bounds: the CPU assembly from that hierarchy and the GPU's order gives the GPU's nodes bit
 ///   for bit (children, and boxes: unions are min/max, exact on every device);
 /// - the whole tree: valid, and its SAH within 0.5 % of the CPU twin's.
+/// At the `lbvh` builder's own key width (`KeyWidth::LBVH`, which depends on the count).
 fn check_stages_against_cpu_twins(triangles: Vec<Triangle>) {
-    check_stages_with_key_bits(triangles, LBVH_KEY_BITS);
+    check_stages_on(gpu(), triangles, None);
 }
 
 fn check_stages_with_key_bits(triangles: Vec<Triangle>, key_bits: u32) {
-    check_stages_on(gpu(), triangles, key_bits);
+    check_stages_on(gpu(), triangles, Some(key_bits));
 }
 
-fn check_stages_on(ctx: &GpuContext, triangles: Vec<Triangle>, key_bits: u32) {
+/// With keys of `key_bits` bits at every count, or, for `None`, the builder's default width.
+fn check_stages_on(ctx: &GpuContext, triangles: Vec<Triangle>, key_bits: Option<u32>) {
     let scene = scene_of(triangles);
     let tris = &scene.triangles;
     let geometry = Geometry::upload(ctx, &scene).unwrap();
-    let mut builder = LbvhBuilder::new(ctx).with_key_bits(key_bits).unwrap();
+    let mut builder = match key_bits {
+        Some(bits) => LbvhBuilder::new(ctx).with_key_bits(bits).unwrap(),
+        None => LbvhBuilder::new(ctx),
+    };
+    let key_bits = key_bits.unwrap_or(KeyWidth::LBVH.bits(tris.len() as u32));
     let stages = builder.build_stages(ctx, &geometry).unwrap();
 
     let boxes = prim_boxes_cpu(tris);
@@ -142,18 +149,24 @@ fn stages_equal_cpu_twins_on_scenes() {
     check_stages_against_cpu_twins(load_scene("field-10k").unwrap().triangles);
 }
 
+/// Past 2^20 primitives `lbvh` narrows its keys (43 bits up to 2^21) so that the sort still
+/// moves each index with its key: every stage still equals its twin at that width.
+#[test]
+fn stages_equal_cpu_twins_past_a_million_primitives() {
+    let field = load_scene("field:707").unwrap().triangles;
+    assert!(field.len() > 1 << 20 && field.len() <= 1 << 21);
+    assert_eq!(KeyWidth::LBVH.bits(field.len() as u32), 43);
+    check_stages_against_cpu_twins(field);
+}
+
 /// The climb builds the same hierarchy and bit-identical boxes at every workgroup width (the
 /// software driver runs 8 by default, GPUs 64), on sizes that leave a partial last workgroup.
 #[test]
 fn stages_equal_cpu_twins_at_every_climb_width() {
     for width in CLIMB_WIDTHS {
         let ctx = gpu_with_climb_width(width);
-        check_stages_on(&ctx, random_soup(3001, 12), LBVH_KEY_BITS);
-        check_stages_on(
-            &ctx,
-            load_scene("cornell").unwrap().triangles,
-            LBVH_KEY_BITS,
-        );
+        check_stages_on(&ctx, random_soup(3001, 12), None);
+        check_stages_on(&ctx, load_scene("cornell").unwrap().triangles, None);
     }
 }
 

@@ -14,7 +14,8 @@ mod triangles_bounds;
 pub use centroids_reduce::{box_of_words, centroid_bounds_cpu, CentroidsReduce, CENTROIDS_REDUCE};
 pub use lbvh_climb::{assemble_lbvh_cpu, hierarchy_cpu, Hierarchy, LBVH_CLIMB};
 pub use morton_compute::{
-    morton_key, morton_keys_cpu, LBVH_KEY_BITS, MORTON_BITS, MORTON_COMPUTE, TRBVH_KEY_BITS,
+    morton_key, morton_keys_cpu, KeyWidth, LBVH_KEY_BITS, LBVH_PACKED_KEY_BITS, MORTON_BITS,
+    MORTON_COMPUTE, TRBVH_KEY_BITS,
 };
 pub use triangles_bounds::{
     prim_boxes_cpu, TriangleBoundsOutput, TrianglesBounds, TRIANGLES_BOUNDS,
@@ -56,9 +57,11 @@ impl<'a> LbvhInput<'a> {
     }
 }
 
-/// CPU twin of the whole GPU LBVH pipeline over triangles (the `lbvh` builder's key width).
+/// CPU twin of the whole GPU LBVH pipeline over triangles (the `lbvh` builder's key width,
+/// `KeyWidth::LBVH`).
 pub fn build_lbvh_cpu(triangles: &[Triangle]) -> Bvh {
-    build_lbvh_from_boxes_cpu(&prim_boxes_cpu(triangles), LBVH_KEY_BITS).0
+    let key_bits = KeyWidth::LBVH.bits(triangles.len() as u32);
+    build_lbvh_from_boxes_cpu(&prim_boxes_cpu(triangles), key_bits).0
 }
 
 /// CPU twin of the LBVH stages over primitive boxes with keys of `key_bits` (1..=48) bits: the
@@ -118,7 +121,7 @@ impl LbvhBuilder {
         Self {
             triangles_bounds: TrianglesBounds::new(ctx),
             centroids: CentroidsReduce::new(ctx),
-            morton: MortonCompute::new(ctx, LBVH_KEY_BITS),
+            morton: MortonCompute::new(ctx, KeyWidth::LBVH),
             sort: RadixSort::new(ctx),
             climb: LbvhClimb::new(ctx),
             scratch: None,
@@ -126,14 +129,15 @@ impl LbvhBuilder {
         }
     }
 
-    /// Keys of `key_bits` (1..=48) bits instead of `LBVH_KEY_BITS`: the high bits of the full key.
+    /// Keys of `key_bits` (1..=48) bits at every count instead of `KeyWidth::LBVH`: the high
+    /// bits of the full key.
     pub fn with_key_bits(mut self, key_bits: u32) -> Result<Self> {
         if !(1..=MORTON_BITS).contains(&key_bits) {
             return Err(Error::InvalidArgument(format!(
                 "Morton key bits must be 1..={MORTON_BITS}, got {key_bits}"
             )));
         }
-        self.morton.key_bits = key_bits;
+        self.morton.width = KeyWidth::fixed(key_bits);
         Ok(self)
     }
 
@@ -273,7 +277,7 @@ impl LbvhBuilder {
         // Keys that pack the indices hold them above their bits: the sorted primitives show
         // whether they were right.
         let key_mask = if self.morton.packs_indices(n) {
-            u64::MAX >> (64 - self.morton.key_bits)
+            u64::MAX >> (64 - self.morton.key_bits(n))
         } else {
             u64::MAX
         };
@@ -343,7 +347,7 @@ impl LbvhBuilder {
         order: &wgpu::Buffer,
     ) -> Result<()> {
         let scratch = self.scratch.as_ref().expect("reserved");
-        let key_bits = self.morton.key_bits;
+        let key_bits = self.morton.key_bits(count.capacity());
         if self.morton.packs_indices(count.capacity()) {
             self.sort
                 .record_packed(rec, &scratch.keys, order, count, key_bits)

@@ -2,7 +2,9 @@
 //! `morton_compute`), and the CPU twin with the same float steps. Centroids are quantized on a
 //! 2^21-cell grid per axis; the full key interleaves the high `MORTON_AXIS_BITS` (16) bits of each
 //! axis (48 bits), and a build keeps its high `key_bits` of them: fewer radix-sort passes (4 bits
-//! each), and an order consistent with the full key's (ties go to the primitive index).
+//! each), and an order consistent with the full key's (ties go to the primitive index). How many
+//! it keeps may depend on the primitive count (`KeyWidth`): `lbvh` narrows its keys past 2^20
+//! primitives so that the indices still fit above them.
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
@@ -19,10 +21,52 @@ pub const MORTON_BITS: u32 = 3 * MORTON_AXIS_BITS;
 /// shared scenes and an object in a 500× larger box, where 36 bits cost 20 % (README, "Build
 /// floor").
 pub const LBVH_KEY_BITS: u32 = 44;
+/// The fewest key bits `lbvh` narrows its keys to where the primitives' indices do not fit above
+/// 44 bits (past 2^20 primitives), so that its sort still moves each index with its key: 40
+/// bits hold 2^24 primitives in 10 sort passes. The trees' SAH at 40 bits is that of 44 to 4
+/// decimals on the shared scenes and 0.003 % above it on the stadium (README, "Build floor").
+pub const LBVH_PACKED_KEY_BITS: u32 = 40;
 /// Key bits of the treelet builders (`trbvh`, `trbvh-split`): 32 (8 sort passes). Keys that
 /// coarse change the LBVH of a dense object in a large scene, but the treelet rounds repair it:
 /// the optimized trees' SAH moves by at most 0.1 % on the scenes measured (README, "Build floor").
 pub const TRBVH_KEY_BITS: u32 = 32;
+
+/// How many of the full key's high bits a builder's keys keep, by primitive count: `most`, or,
+/// where the indices of that many primitives do not fit above `most` bits, the most bits that
+/// leave room for them, down to `least` (the sort then moves each pair as one word,
+/// `sort::packs_indices`); below `least`, `most` again with the indices apart.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct KeyWidth {
+    pub most: u32,
+    pub least: u32,
+}
+
+impl KeyWidth {
+    /// The `lbvh` builder's width: 44 bits, narrowed to 40 as the count grows to 2^24.
+    pub const LBVH: KeyWidth = KeyWidth {
+        most: LBVH_KEY_BITS,
+        least: LBVH_PACKED_KEY_BITS,
+    };
+
+    /// Always `bits` bits.
+    pub const fn fixed(bits: u32) -> KeyWidth {
+        KeyWidth {
+            most: bits,
+            least: bits,
+        }
+    }
+
+    /// The key bits of a build over `count` primitives.
+    pub fn bits(self, count: u32) -> u32 {
+        let index_bits = u32::BITS - count.saturating_sub(1).leading_zeros();
+        let room = 64 - index_bits;
+        if room < self.most && room >= self.least {
+            room
+        } else {
+            self.most
+        }
+    }
+}
 
 /// Parameters of `morton_compute.wgsl`.
 #[repr(C)]
@@ -67,22 +111,27 @@ pub fn morton_keys_cpu(prim_boxes: &[Aabb], bounds: &Aabb, key_bits: u32) -> Vec
 /// The kernel `morton_compute`, and the width of the keys it writes.
 pub(crate) struct MortonCompute {
     kernel: Kernel<MortonParams>,
-    /// The high bits of the full key that the keys keep (1..=48).
-    pub key_bits: u32,
+    /// How many high bits of the full key the keys keep (1..=48), by primitive count.
+    pub width: KeyWidth,
 }
 
 impl MortonCompute {
-    pub fn new(ctx: &crate::gpu::GpuContext, key_bits: u32) -> Self {
+    pub fn new(ctx: &crate::gpu::GpuContext, width: KeyWidth) -> Self {
         Self {
             kernel: Kernel::new(ctx, &MORTON_COMPUTE),
-            key_bits,
+            width,
         }
+    }
+
+    /// The key bits of a build over up to `capacity` primitives.
+    pub fn key_bits(&self, capacity: u32) -> u32 {
+        self.width.bits(capacity)
     }
 
     /// Whether the keys of `capacity` primitives carry their indices (`sort::packs_indices`):
     /// where the values fit above the key bits, the sort moves each pair as one word.
     pub fn packs_indices(&self, capacity: u32) -> bool {
-        packs_indices(self.key_bits, capacity)
+        packs_indices(self.key_bits(capacity), capacity)
     }
 
     /// Records key computation over `count` primitive boxes: `keys[i]` (as `[lo, hi]`, the high
@@ -102,7 +151,7 @@ impl MortonCompute {
         let params = MortonParams {
             count: count.capacity(),
             row_pitch: grid.row_pitch,
-            key_bits: self.key_bits,
+            key_bits: self.key_bits(count.capacity()),
             packed: u32::from(self.packs_indices(count.capacity())),
         };
         pass.dispatch(
@@ -117,5 +166,30 @@ impl MortonCompute {
                 count.limit(pass.ctx()),
             ],
         );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lbvh_keys_narrow_only_where_the_indices_need_the_room() {
+        let bits = |count| KeyWidth::LBVH.bits(count);
+        assert_eq!(bits(0), 44);
+        assert_eq!(bits(1), 44);
+        assert_eq!(bits(1 << 20), 44);
+        assert_eq!(bits((1 << 20) + 1), 43);
+        assert_eq!(bits(1 << 21), 43);
+        assert_eq!(bits((1 << 23) + 1), 40);
+        assert_eq!(bits(1 << 24), 40);
+        assert_eq!(bits((1 << 24) + 1), 44);
+        assert_eq!(bits(u32::MAX), 44);
+        for count in [1, 1 << 20, (1 << 20) + 1, 8_720_000, 1 << 24] {
+            assert!(packs_indices(bits(count), count), "{count}");
+        }
+        assert!(!packs_indices(bits((1 << 24) + 1), (1 << 24) + 1));
+        assert_eq!(KeyWidth::fixed(32).bits(u32::MAX), 32);
+        assert_eq!(KeyWidth::fixed(48).bits(1 << 16), 48);
     }
 }
