@@ -77,6 +77,7 @@ fn assert_sah_close_to_cpu_twin(bvh: &Bvh, triangles: &[Triangle], key_bits: u32
 /// - bounds: the CPU assembly from that hierarchy and the GPU's order gives the GPU's nodes bit
 ///   for bit (children, and boxes: unions are min/max, exact on every device);
 /// - the whole tree: valid, and its SAH within 0.5 % of the CPU twin's.
+///
 /// At the `lbvh` builder's own key width (`KeyWidth::LBVH`, which depends on the count).
 fn check_stages_against_cpu_twins(triangles: Vec<Triangle>) {
     check_stages_on(gpu(), triangles, None);
