@@ -17,6 +17,7 @@ use treelet::bvh::{sah_cost, validate, Bvh, SahParams};
 use treelet::device::{Geometry, Tree};
 use treelet::gpu::{GpuContext, CLIMB_WIDTHS};
 use treelet::scene::{load_scene, Triangle};
+use treelet::sort::packs_indices;
 use treelet::trace::closest_hits;
 
 /// The grid cell (x, y, z) of a key of the high `key_bits` bits of a full Morton key (whose bit
@@ -180,6 +181,16 @@ fn stages_equal_cpu_twins_at_other_key_widths() {
         check_stages_with_key_bits(field.clone(), key_bits);
         check_stages_with_key_bits(random_soup(3000, u64::from(key_bits)), key_bits);
     }
+}
+
+/// Keys whose bits leave no room for the indices (all 48 bits past 2^16 primitives): the Morton
+/// kernel writes the indices apart and the sort moves them beside the keys, and every stage
+/// still equals its twin.
+#[test]
+fn stages_equal_cpu_twins_with_the_indices_apart() {
+    let soup = random_soup(70_000, 48);
+    assert!(!packs_indices(MORTON_BITS, soup.len() as u32));
+    check_stages_with_key_bits(soup, MORTON_BITS);
 }
 
 #[test]
