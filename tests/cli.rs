@@ -179,6 +179,11 @@ fn bench_prints_json_lines() {
     }
     let gpu_warmup = &records[0]["build_warmup"];
     assert!(gpu_warmup["ms"].as_f64().unwrap() >= 50.0, "{gpu_warmup}");
+    assert_eq!(records[0]["key_bits"], 44, "lbvh's keys: {}", records[0]);
+    assert!(
+        records[1]["key_bits"].is_null(),
+        "a CPU builder sorts no keys"
+    );
 }
 
 /// `bench --level-dispatches ... --team-below ...` measures trbvh once per combination (lbvh once)

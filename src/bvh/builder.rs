@@ -4,6 +4,7 @@
 
 use std::time::Instant;
 
+use super::lbvh::{KeyWidth, TRBVH_KEY_BITS};
 use super::treelet::{RoundSchedule, TreeletSettings};
 use super::tuning::{tune_updater, TunedSchedule, TuningOptions};
 use super::update::{TreeUpdater, UpdateMode};
@@ -75,6 +76,17 @@ impl Builder {
             self,
             Builder::Lbvh | Builder::Trbvh(_) | Builder::TrbvhSplit(_)
         )
+    }
+
+    /// The Morton key bits a GPU builder sorts for `prims` primitives (its references, for
+    /// `trbvh-split`): `lbvh` 44, narrowed past 2^20 primitives (`KeyWidth::LBVH`), the treelet
+    /// builders 32; None for the CPU builders.
+    pub fn morton_key_bits(self, prims: u32) -> Option<u32> {
+        match self {
+            Builder::Lbvh => Some(KeyWidth::LBVH.bits(prims)),
+            Builder::Trbvh(_) | Builder::TrbvhSplit(_) => Some(TRBVH_KEY_BITS),
+            Builder::Sweep | Builder::Sbvh => None,
+        }
     }
 
     /// Whether the builder may reference a triangle from several leaves (spatial splits): its

@@ -277,6 +277,8 @@ struct BenchRecord {
     /// The radix sort's keys per invocation asked for or kept by a tuning (null: chosen per
     /// sort).
     sort_tile_items: Option<u32>,
+    /// GPU builders: the Morton key bits sorted (`lbvh`'s depend on the triangle count).
+    key_bits: Option<u32>,
     /// The climbs' workgroup width in effect.
     climb_width: u32,
     adapter: String,
@@ -582,6 +584,7 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
             round_overlap: schedule.overlap,
             schedule_tuning: report.tuned.as_ref().map(TuningRecord::from),
             sort_tile_items,
+            key_bits: builder.morton_key_bits(scene.triangles.len() as u32),
             climb_width: gpu.climb_width(),
             adapter: gpu.adapter_description(),
             device_type: format!("{:?}", gpu.info.device_type),
