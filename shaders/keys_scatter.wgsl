@@ -29,7 +29,7 @@
 // `cleared_counts`, into which the scatter after it adds.
 // Values (`params.pairs`): in `values_in`, moved to `values_out` beside the keys
 // (PAIRS_SEPARATE); or above the low `params.key_bits` bits of the keys, which the sort never
-// reads as digits (`RadixSort::record_packed`): each pair then moves as one 8-byte store
+// reads as digits (`SortValues::AboveKeys`): each pair then moves as one 8-byte store
 // (PAIRS_PACKED), and the last pass writes the key with the bits above cleared and the value to
 // `values_out` (PAIRS_UNPACK), so the sorted buffers are those of the separate form.
 // 11 KiB of workgroup memory; no subgroup operations.

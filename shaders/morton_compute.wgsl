@@ -15,7 +15,7 @@ struct MortonParams {
     // 1..=48: the high bits of the full key that the key keeps.
     key_bits: u32,
     // 1: the index goes above the key's bits, not in `values` (`sort::packs_indices`, sorted by
-    // `RadixSort::record_packed`); 0: in `values`.
+    // `RadixSort::record` with `SortValues::AboveKeys`); 0: in `values`.
     packed: u32,
 }
 

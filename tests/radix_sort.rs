@@ -1,13 +1,13 @@
 //! The GPU radix sort (`sort::RadixSort`) and its CPU twin against `sort_unstable` on
 //! (key, value) pairs with values 0..n: equal results mean sorted by key and stable. Sorts whose
-//! values fit above the key bits run with them there too (`record_packed`).
+//! values fit above the key bits run with them there too (`SortValues::AboveKeys`).
 
 mod common;
 
 use common::{gpu, rng};
 use rand::Rng;
 use treelet::gpu::{ItemCount, ParamSlab, Recorder};
-use treelet::sort::{packs_indices, sort_pairs_cpu, RadixSort, SORT_TILE_ITEMS};
+use treelet::sort::{packs_indices, sort_pairs_cpu, RadixSort, SortValues, SORT_TILE_ITEMS};
 
 /// The largest tile: 256 invocations of 32 keys.
 const SORT_TILE: usize = 256 * 32;
@@ -45,7 +45,7 @@ fn low_bits(key: u64, key_bits: u32) -> u64 {
 }
 
 /// Sorts with the GPU and the CPU twin and compares both with `expected`; where the values fit
-/// above the key bits, also with them there (`sort_pairs_packed`), whose sorted keys are the key
+/// above the key bits, also with them there (`SortValues::AboveKeys`), whose sorted keys are the key
 /// bits alone.
 fn check(sorter: &mut RadixSort, keys: &[u64], key_bits: u32) {
     if packs_indices(key_bits, keys.len() as u32) {
@@ -53,7 +53,7 @@ fn check(sorter: &mut RadixSort, keys: &[u64], key_bits: u32) {
         let (want_keys, want_values) = expected(keys, key_bits);
         let gpu_keys: Vec<[u32; 2]> = keys.iter().map(|&k| split(k)).collect();
         let (got_keys, got_values) = sorter
-            .sort_pairs_packed(gpu(), &gpu_keys, &values, key_bits)
+            .sort_pairs(gpu(), &gpu_keys, &values, key_bits, SortValues::AboveKeys)
             .unwrap();
         let want_keys: Vec<[u32; 2]> = want_keys
             .iter()
@@ -75,7 +75,7 @@ fn check(sorter: &mut RadixSort, keys: &[u64], key_bits: u32) {
     );
     let gpu_keys: Vec<[u32; 2]> = keys.iter().map(|&k| split(k)).collect();
     let (got_keys, got_values) = sorter
-        .sort_pairs(gpu(), &gpu_keys, &values, key_bits)
+        .sort_pairs(gpu(), &gpu_keys, &values, key_bits, SortValues::Apart)
         .unwrap();
     let got_keys: Vec<u64> = got_keys.into_iter().map(join).collect();
     if let Some(i) =
@@ -229,13 +229,34 @@ fn two_sorts_in_one_submission() {
     let mut params = ParamSlab::new(ctx);
     let mut rec = Recorder::new(ctx, &mut params, Some(&mut timer));
     sorter
-        .record(&mut rec, &ka, &va, ItemCount::Known(a.len() as u32), 63)
+        .record(
+            &mut rec,
+            &ka,
+            &va,
+            ItemCount::Known(a.len() as u32),
+            63,
+            SortValues::Apart,
+        )
         .unwrap();
     sorter
-        .record(&mut rec, &kb, &vb, ItemCount::Known(b.len() as u32), 11)
+        .record(
+            &mut rec,
+            &kb,
+            &vb,
+            ItemCount::Known(b.len() as u32),
+            11,
+            SortValues::Apart,
+        )
         .unwrap();
     sorter
-        .record(&mut rec, &k1, &v1, ItemCount::Known(1), 63)
+        .record(
+            &mut rec,
+            &k1,
+            &v1,
+            ItemCount::Known(1),
+            63,
+            SortValues::Apart,
+        )
         .unwrap();
     rec.submit();
     for (keys, kbuf, vbuf, bits) in [(&a, &ka, &va, 63), (&b, &kb, &vb, 11)] {
@@ -259,13 +280,17 @@ fn two_sorts_in_one_submission() {
 fn invalid_arguments_are_errors() {
     let ctx = gpu();
     let mut sorter = RadixSort::new(ctx);
-    assert!(sorter.sort_pairs(ctx, &[[0, 0]], &[0], 0).is_err());
-    assert!(sorter.sort_pairs(ctx, &[[0, 0]], &[0], 65).is_err());
-    assert!(sorter.sort_pairs(ctx, &[[0, 0]], &[0, 1], 8).is_err());
-    // Values must fit above the key bits.
-    assert!(sorter.sort_pairs_packed(ctx, &[[0, 0]], &[0], 64).is_err());
+    let apart = SortValues::Apart;
+    assert!(sorter.sort_pairs(ctx, &[[0, 0]], &[0], 0, apart).is_err());
+    assert!(sorter.sort_pairs(ctx, &[[0, 0]], &[0], 65, apart).is_err());
     assert!(sorter
-        .sort_pairs_packed(ctx, &[[0, 0], [0, 0]], &[0, 1 << 20], 44)
+        .sort_pairs(ctx, &[[0, 0]], &[0, 1], 8, apart)
+        .is_err());
+    // Values must fit above the key bits.
+    let above = SortValues::AboveKeys;
+    assert!(sorter.sort_pairs(ctx, &[[0, 0]], &[0], 64, above).is_err());
+    assert!(sorter
+        .sort_pairs(ctx, &[[0, 0], [0, 0]], &[0, 1 << 20], 44, above)
         .is_err());
 }
 
@@ -335,12 +360,14 @@ fn a_count_on_the_gpu_sorts_only_its_pairs() {
                 buffer: &count_buffer,
                 capacity: capacity as u32,
             };
-            if packed {
-                sorter.record_packed(&mut rec, &kbuf, &vbuf, len, bits)
+            let values_at = if packed {
+                SortValues::AboveKeys
             } else {
-                sorter.record(&mut rec, &kbuf, &vbuf, len, bits)
-            }
-            .unwrap();
+                SortValues::Apart
+            };
+            sorter
+                .record(&mut rec, &kbuf, &vbuf, len, bits, values_at)
+                .unwrap();
             rec.submit();
             let got_keys: Vec<[u32; 2]> = treelet::gpu::read_buffer(ctx, &kbuf, capacity).unwrap();
             let got_values: Vec<u32> = treelet::gpu::read_buffer(ctx, &vbuf, capacity).unwrap();

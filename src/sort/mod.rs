@@ -18,5 +18,5 @@ pub use keys_scatter::KEYS_SCATTER;
 pub use prefix_scan::{scan_blocks, PrefixScan};
 pub use radix_sort::{
     check_tile_items, context_tile_items, packs_indices, sort_pairs_cpu, tile_items, RadixSort,
-    RADIX_BITS, SORT_TILE_ITEMS,
+    SortValues, RADIX_BITS, SORT_TILE_ITEMS,
 };

@@ -26,7 +26,7 @@
 //! second session"), and 1.7-3.5x on lavapipe, so they were taken out.
 //!
 //! Values beside the keys, or in them: where the values are small enough to fit above the sorted
-//! key bits in 64, a sort can take them there, in bits it never reads as digits (`record_packed`;
+//! key bits in 64, a sort can take them there, in bits it never reads as digits (`SortValues::AboveKeys`;
 //! the LBVH's Morton keys with their indices, `packs_indices`): every pass but the last then
 //! moves each pair as one 8-byte word, where the separate form reads and scatters 12 bytes in two
 //! stores (one memory sector each on a GPU), and the last pass writes keys and values apart, as
@@ -95,6 +95,16 @@ pub fn tile_items(len: u32, device: wgpu::DeviceType) -> u32 {
     }
 }
 
+/// Where a sort's values are (`RadixSort::record`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SortValues {
+    /// In a values buffer of their own, moved beside the keys.
+    Apart,
+    /// Above the key bits in the keys' words, moved with them (`packs_indices`), and written to
+    /// the values buffer by the last pass.
+    AboveKeys,
+}
+
 /// Where a pass finds and leaves the values (`pairs` of `SortParams`; the constants `PAIRS_*` of
 /// keys_scatter.wgsl).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -128,7 +138,7 @@ const _: () = assert!(std::mem::size_of::<SortParams>() == 32);
 
 impl SortParams {
     /// Pass `pass` of a sort of `len` pairs in `num_tiles` tiles by the low `key_bits` bits,
-    /// with values as `packed` says (`record_packed`): above the key bits, unpacked by the last
+    /// with values as `packed` says (`SortValues::AboveKeys`): above the key bits, unpacked by the last
     /// pass.
     fn pass(len: u32, num_tiles: u32, key_bits: u32, pass: u32, packed: bool) -> Self {
         let shift = pass * RADIX_BITS;
@@ -152,9 +162,29 @@ impl SortParams {
 }
 
 /// Whether `len` pairs whose values are indices below `len` fit keys of `key_bits` bits with the
-/// values above them in 64 bits (`record_packed`).
+/// values above them in 64 bits (`SortValues::AboveKeys`).
 pub fn packs_indices(key_bits: u32, len: u32) -> bool {
     (1..64).contains(&key_bits) && u64::from(len.saturating_sub(1)) >> (64 - key_bits) == 0
+}
+
+/// The keys' low `key_bits` (1..=63) bits with the values above them (`SortValues::AboveKeys`),
+/// or an error where a value does not fit.
+fn pack_values(keys: &[[u32; 2]], values: &[u32], key_bits: u32) -> Result<Vec<[u32; 2]>> {
+    if !(1..64).contains(&key_bits) || values.iter().any(|&v| u64::from(v) >> (64 - key_bits) != 0)
+    {
+        return Err(Error::InvalidArgument(format!(
+            "values above keys of {key_bits} bits do not fit in 64 bits"
+        )));
+    }
+    Ok(keys
+        .iter()
+        .zip(values)
+        .map(|(k, &v)| {
+            let key = (u64::from(k[0]) | (u64::from(k[1]) << 32)) & (u64::MAX >> (64 - key_bits));
+            let word = key | (u64::from(v) << key_bits);
+            [word as u32, (word >> 32) as u32]
+        })
+        .collect())
 }
 
 /// Number of passes for `key_bits` sorted bits.
@@ -263,11 +293,19 @@ impl RadixSort {
     }
 
     /// Records the sort of the first `len` pairs of `keys` (`[u32; 2]` each, low word first) and
-    /// `values` (u32 each) by the low `key_bits` (1..=64) bits of the key, ascending and stable;
-    /// nothing is submitted. `len` may be a count computed on the GPU earlier in the recording:
-    /// the passes are sized for its capacity, and the pairs past the count are left as they are.
-    /// The sorted pairs end
-    /// in `keys` and `values`, which need `STORAGE | COPY_SRC` usage. Internal scratch buffers grow
+    /// their values by the low `key_bits` (1..=64) bits of the key, ascending and stable; nothing
+    /// is submitted. The values are u32 each, where `values_at` says:
+    /// - `SortValues::Apart`: in `values`;
+    /// - `SortValues::AboveKeys`: in the keys (1..=63 key bits), `keys[i]` holding key | value <<
+    ///   key_bits, the values below 2^(64 − key_bits) (`packs_indices`; `values` is not read).
+    ///   The passes move each pair as one word, and the sorted pairs end as with `Apart`: the
+    ///   keys in `keys`, the bits above `key_bits` cleared, and the values in `values`. Pairs past
+    ///   a count computed on the GPU are left as they are (packed); one pair runs the passes too,
+    ///   which unpack it.
+    ///
+    /// `len` may be a count computed on the GPU earlier in the recording: the passes are sized for
+    /// its capacity, and the pairs past the count are left as they are. The sorted pairs end in
+    /// `keys` and `values`, which need `STORAGE | COPY_SRC` usage. Internal scratch buffers grow
     /// to the capacity on demand; several sorts may be recorded into one recording.
     ///
     /// Everything is one compute pass, named "sort" (timestamped when the recording has a timer;
@@ -280,43 +318,15 @@ impl RadixSort {
         values: &wgpu::Buffer,
         len: ItemCount<'_>,
         key_bits: u32,
+        values_at: SortValues,
     ) -> Result<()> {
-        self.record_pairs(rec, keys, values, len, key_bits, false)
-    }
-
-    /// Like `record`, for keys of `key_bits` (1..=63) bits with the values above them: `keys[i]`
-    /// holds key | value << key_bits (64 bits, low word first), the values below 2^(64 −
-    /// key_bits) (`packs_indices`; `values` is not read). The passes move each pair as one word,
-    /// and the sorted pairs end as `record` leaves them: the keys in `keys`, the bits above
-    /// `key_bits` cleared, and the values in `values`. Pairs past a count computed on the GPU are
-    /// left as they are (packed); one pair runs the passes too, which unpack it.
-    pub fn record_packed(
-        &mut self,
-        rec: &mut Recorder<'_>,
-        keys: &wgpu::Buffer,
-        values: &wgpu::Buffer,
-        len: ItemCount<'_>,
-        key_bits: u32,
-    ) -> Result<()> {
-        if key_bits >= 64 {
+        let packed = values_at == SortValues::AboveKeys;
+        if packed && key_bits >= 64 {
             return Err(Error::InvalidArgument(format!(
                 "a radix sort with the values above the keys sorts at most 63 key bits, got \
                  {key_bits}"
             )));
         }
-        self.record_pairs(rec, keys, values, len, key_bits, true)
-    }
-
-    /// `record` (`packed` false) or `record_packed`.
-    fn record_pairs(
-        &mut self,
-        rec: &mut Recorder<'_>,
-        keys: &wgpu::Buffer,
-        values: &wgpu::Buffer,
-        len: ItemCount<'_>,
-        key_bits: u32,
-        packed: bool,
-    ) -> Result<()> {
         if !(1..=64).contains(&key_bits) {
             return Err(Error::InvalidArgument(format!(
                 "radix sort key_bits must be 1..=64, got {key_bits}"
@@ -402,54 +412,16 @@ impl RadixSort {
     }
 
     /// Uploads the pairs, sorts them by the low `key_bits` bits of the keys, submits and reads the
-    /// result back (tests and benchmarks).
+    /// result back (tests and benchmarks). With `SortValues::AboveKeys` the values are uploaded
+    /// above the low `key_bits` (1..=63) bits of the keys, whose own bits there are dropped; that
+    /// fails when a value does not fit.
     pub fn sort_pairs(
         &mut self,
         ctx: &GpuContext,
         keys: &[[u32; 2]],
         values: &[u32],
         key_bits: u32,
-    ) -> Result<(Vec<[u32; 2]>, Vec<u32>)> {
-        self.upload_and_sort(ctx, keys, values, key_bits, false)
-    }
-
-    /// Like `sort_pairs` with the values uploaded above the low `key_bits` (1..=63) bits of the
-    /// keys, whose own bits there are dropped, and sorted by `record_packed` (tests). Fails when a
-    /// value does not fit.
-    pub fn sort_pairs_packed(
-        &mut self,
-        ctx: &GpuContext,
-        keys: &[[u32; 2]],
-        values: &[u32],
-        key_bits: u32,
-    ) -> Result<(Vec<[u32; 2]>, Vec<u32>)> {
-        if !(1..64).contains(&key_bits)
-            || values.iter().any(|&v| u64::from(v) >> (64 - key_bits) != 0)
-        {
-            return Err(Error::InvalidArgument(format!(
-                "values above keys of {key_bits} bits do not fit in 64 bits"
-            )));
-        }
-        let packed: Vec<[u32; 2]> = keys
-            .iter()
-            .zip(values)
-            .map(|(k, &v)| {
-                let key =
-                    (u64::from(k[0]) | (u64::from(k[1]) << 32)) & (u64::MAX >> (64 - key_bits));
-                let word = key | (u64::from(v) << key_bits);
-                [word as u32, (word >> 32) as u32]
-            })
-            .collect();
-        self.upload_and_sort(ctx, &packed, values, key_bits, true)
-    }
-
-    fn upload_and_sort(
-        &mut self,
-        ctx: &GpuContext,
-        keys: &[[u32; 2]],
-        values: &[u32],
-        key_bits: u32,
-        packed: bool,
+        values_at: SortValues,
     ) -> Result<(Vec<[u32; 2]>, Vec<u32>)> {
         if keys.len() != values.len() {
             return Err(Error::InvalidArgument(format!(
@@ -460,23 +432,30 @@ impl RadixSort {
         }
         let len = u32::try_from(keys.len())
             .map_err(|_| Error::InvalidArgument(format!("{} pairs to sort", keys.len())))?;
-        let key_buffer = storage_buffer(ctx, "sort keys", keys)?;
         // Packed, the values buffer only receives the sorted values: it starts with words no value
         // has, so that each must come from the keys.
-        let value_buffer = if packed {
-            storage_buffer(ctx, "sort values", &vec![u32::MAX; keys.len().max(1)])?
-        } else {
-            storage_buffer(ctx, "sort values", values)?
+        let (key_buffer, value_buffer) = match values_at {
+            SortValues::Apart => (
+                storage_buffer(ctx, "sort keys", keys)?,
+                storage_buffer(ctx, "sort values", values)?,
+            ),
+            SortValues::AboveKeys => (
+                storage_buffer(ctx, "sort keys", &pack_values(keys, values, key_bits)?)?,
+                storage_buffer(ctx, "sort values", &vec![u32::MAX; keys.len().max(1)])?,
+            ),
         };
         let mut params = std::mem::replace(&mut self.params, ParamSlab::new(ctx));
         let result = {
             let mut rec = Recorder::new(ctx, &mut params, None);
             let count = ItemCount::Known(len);
-            let result = if packed {
-                self.record_packed(&mut rec, &key_buffer, &value_buffer, count, key_bits)
-            } else {
-                self.record(&mut rec, &key_buffer, &value_buffer, count, key_bits)
-            };
+            let result = self.record(
+                &mut rec,
+                &key_buffer,
+                &value_buffer,
+                count,
+                key_bits,
+                values_at,
+            );
             rec.submit();
             result
         };

@@ -32,7 +32,7 @@ use crate::gpu::{
     StageTime,
 };
 use crate::scene::Triangle;
-use crate::sort::{sort_pairs_cpu, RadixSort};
+use crate::sort::{sort_pairs_cpu, RadixSort, SortValues};
 use crate::{Error, Result};
 
 /// What an LBVH is built over.
@@ -348,12 +348,13 @@ impl LbvhBuilder {
     ) -> Result<()> {
         let scratch = self.scratch.as_ref().expect("reserved");
         let key_bits = self.morton.key_bits(count.capacity());
-        if self.morton.packs_indices(count.capacity()) {
-            self.sort
-                .record_packed(rec, &scratch.keys, order, count, key_bits)
+        let values_at = if self.morton.packs_indices(count.capacity()) {
+            SortValues::AboveKeys
         } else {
-            self.sort.record(rec, &scratch.keys, order, count, key_bits)
-        }
+            SortValues::Apart
+        };
+        self.sort
+            .record(rec, &scratch.keys, order, count, key_bits, values_at)
     }
 
     /// Stages 4-5: hierarchy and bounds into `nodes` in one climb (pass "hierarchy"). The

@@ -138,7 +138,7 @@ impl MortonCompute {
     /// Records key computation over `count` primitive boxes: `keys[i]` (as `[lo, hi]`, the high
     /// `key_bits` of the full key) and `values[i] = i` (the permutation the sort reorders), or,
     /// where they pack the indices (`packs_indices` of the capacity), `keys[i]` = key | i <<
-    /// key_bits (the sort's `record_packed` form).
+    /// key_bits (the sort's `SortValues::AboveKeys` form).
     pub fn record(
         &self,
         pass: &mut Pass<'_>,
