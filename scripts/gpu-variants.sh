@@ -49,7 +49,7 @@ run)
   : > "$out/variants.jsonl"
   ls .gpu/variant-*.xz > /dev/null 2>&1 || { echo "no .gpu/variant-*.xz: run 'bash scripts/gpu-variants.sh build' first"; exit 1; }
   # The variants whose answer decides the most first (a capped run keeps those), then any others.
-  first="${ORDER:-wide-dynamic-draft wide-group-registers shadow-inner-loop}"
+  first="${ORDER:-formation-registers wide-dynamic-draft wide-group-registers shadow-inner-loop}"
   names=$( (for n in $first; do [ -f ".gpu/variant-$n.xz" ] && echo "$n"; done
     for f in .gpu/variant-*.xz; do n=$(basename "$f" .xz); echo "${n#variant-}"; done) | awk '!seen[$0]++')
   for name in $names; do
