@@ -164,14 +164,18 @@ impl SortParams {
 /// Whether `len` pairs whose values are indices below `len` fit keys of `key_bits` bits with the
 /// values above them in 64 bits (`SortValues::AboveKeys`).
 pub fn packs_indices(key_bits: u32, len: u32) -> bool {
-    (1..64).contains(&key_bits) && u64::from(len.saturating_sub(1)) >> (64 - key_bits) == 0
+    fits_above_keys(len.saturating_sub(1), key_bits)
+}
+
+/// Whether `value` fits above keys of `key_bits` (1..=63) bits in 64 bits.
+fn fits_above_keys(value: u32, key_bits: u32) -> bool {
+    (1..64).contains(&key_bits) && u64::from(value) >> (64 - key_bits) == 0
 }
 
 /// The keys' low `key_bits` (1..=63) bits with the values above them (`SortValues::AboveKeys`),
 /// or an error where a value does not fit.
 fn pack_values(keys: &[[u32; 2]], values: &[u32], key_bits: u32) -> Result<Vec<[u32; 2]>> {
-    if !(1..64).contains(&key_bits) || values.iter().any(|&v| u64::from(v) >> (64 - key_bits) != 0)
-    {
+    if !(1..64).contains(&key_bits) || !values.iter().all(|&v| fits_above_keys(v, key_bits)) {
         return Err(Error::InvalidArgument(format!(
             "values above keys of {key_bits} bits do not fit in 64 bits"
         )));
