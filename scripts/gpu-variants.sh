@@ -49,13 +49,18 @@ run)
   : > "$out/variants.jsonl"
   ls .gpu/variant-*.xz > /dev/null 2>&1 || { echo "no .gpu/variant-*.xz: run 'bash scripts/gpu-variants.sh build' first"; exit 1; }
   # The variants whose answer decides the most first (a capped run keeps those), then any others.
-  first="${ORDER:-formation-registers wide-dynamic-draft wide-group-registers shadow-inner-loop}"
+  first="${ORDER:-mark-frontier}"
   names=$( (for n in $first; do [ -f ".gpu/variant-$n.xz" ] && echo "$n"; done
     for f in .gpu/variant-*.xz; do n=$(basename "$f" .xz); echo "${n#variant-}"; done) | awk '!seen[$0]++')
   for name in $names; do
     f=.gpu/variant-$name.xz
     patch=scripts/variants/$name.patch
     xz -dc "$f" > "$dir/$name" && chmod +x "$dir/$name"
+    # A throwaway bench first: on an H200 the first scene of three of five variants timed the
+    # variant's build 3-4 times slower than its later scenes did (README, "On an NVIDIA H200,
+    # third session"); a first run's cost, it seems, not the variant's.
+    timeout 30 "$dir/$name" bench --scene cornell --builder trbvh --width 16 --height 16 --spp 1 \
+      --repeats 3 --tune-schedule off > /dev/null 2>&1 || true
     opts=${BENCH_OPTS:-$(sed -n 's/^# bench: //p' "$patch")}
     scenes=${SCENES:-$(sed -n 's/^# scenes: //p' "$patch")}
     for s in $scenes; do

@@ -193,6 +193,32 @@ fn prim_sets(tree: &WorkingTree, order: &[usize]) -> Vec<PrimSet> {
     sets
 }
 
+/// A hash of each node's subtree: its shape and the primitives at its leaves, the same for a
+/// node whose children are swapped.
+fn subtree_shapes(tree: &WorkingTree, order: &[usize]) -> Vec<u64> {
+    let mix = |mut h: u64| {
+        h ^= h >> 31;
+        h = h.wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        h ^= h >> 27;
+        h = h.wrapping_mul(0x94d0_49bb_1331_11eb);
+        h ^ (h >> 31)
+    };
+    let mut shapes = vec![0; tree.nodes.len()];
+    for &i in order {
+        let n = tree.nodes[i];
+        shapes[i] = if n.is_leaf() {
+            mix(u64::from(tree.prims[n.left_or_first as usize]))
+        } else {
+            let (l, r) = (
+                shapes[n.left_or_first as usize],
+                shapes[n.right_or_count as usize],
+            );
+            mix(l.min(r) ^ mix(l.max(r) ^ 0x632b_e59b_d9b4_e019))
+        };
+    }
+    shapes
+}
+
 /// Children before parents (post-order from the root); every node once.
 fn bottom_up(tree: &WorkingTree) -> Vec<usize> {
     let mut order = Vec::with_capacity(tree.nodes.len());
@@ -219,9 +245,13 @@ fn bottom_up(tree: &WorkingTree) -> Vec<usize> {
 ///   (exactly), every box is the union of its children's (exactly: min/max), and every cost is
 ///   the SAH cost of the node over its children (within `COST_TOLERANCE`);
 /// - against the CPU twin run from the GPU's own LBVH: wherever a node holds the same primitives
-///   in both trees, its costs agree within `COST_TOLERANCE` — topology may differ only where the
-///   alternatives cost the same within rounding (a device that fuses Ci·A into the following add
-///   breaks such ties its own way); and the collapsed trees' SAH agree within 0.5 %.
+///   in both trees, its box is the same (exactly), and wherever it holds the same subtree (the
+///   same shape over the same primitives), its cost agrees within `COST_TOLERANCE`; the
+///   collapsed trees' SAH agree within 0.5 %. Topology may differ: a device that fuses Ci·A into
+///   the following add breaks near-ties its own way, and the later rounds then restructure a
+///   different tree, so above such a node the costs of the same primitives may differ by more
+///   than rounding (an NVIDIA H200 with overlapped rounds on field-10k: the root's 591759.7
+///   against the CPU's 591805.8).
 ///
 /// Returns the fraction of internal nodes whose primitive sets match.
 fn assert_optimizer_agrees(gpu: &WorkingTree, cpu: &WorkingTree, sah: &SahParams) -> f64 {
@@ -264,7 +294,9 @@ fn assert_optimizer_agrees(gpu: &WorkingTree, cpu: &WorkingTree, sah: &SahParams
             gpu.costs[i]
         );
     }
-    let (gpu_sets, cpu_sets) = (prim_sets(gpu, &order), prim_sets(cpu, &bottom_up(cpu)));
+    let cpu_order = bottom_up(cpu);
+    let (gpu_sets, cpu_sets) = (prim_sets(gpu, &order), prim_sets(cpu, &cpu_order));
+    let (gpu_shapes, cpu_shapes) = (subtree_shapes(gpu, &order), subtree_shapes(cpu, &cpu_order));
     let mut matching = 0;
     let internal = gpu.nodes.iter().filter(|n| !n.is_leaf()).count();
     for i in 0..gpu.nodes.len() {
@@ -279,9 +311,12 @@ fn assert_optimizer_agrees(gpu: &WorkingTree, cpu: &WorkingTree, sah: &SahParams
             cpu.nodes[i].bounds(),
             "node {i}: box"
         );
+        if gpu_shapes[i] != cpu_shapes[i] {
+            continue;
+        }
         assert!(
             within(gpu.costs[i], cpu.costs[i], COST_TOLERANCE),
-            "node {i} ({} primitives): cost {} vs CPU {}",
+            "node {i} ({} primitives, the same subtree): cost {} vs CPU {}",
             gpu.prim_counts[i],
             gpu.costs[i],
             cpu.costs[i]

@@ -1,8 +1,8 @@
 // The diffuse path integrator of the path-tracing kernels (paths_trace.wgsl: binary BVH,
 // paths_trace_wide.wgsl: wide BVH), which declare the bindings and include their traversal
 // (`traverse`) before this file.
-// Diffuse path tracing: one invocation per pixel, `samples` paths per pixel per dispatch (traced
-// in one loop over all the pixel's rays, see `main`), each with up to `max_depth` closest-hit
+// Diffuse path tracing: one invocation per pixel, `samples` paths per pixel per dispatch (in one
+// loop over the bounce rays of all of them, see `main`), each with up to `max_depth` closest-hit
 // rays (cosine-weighted bounces; emissive surfaces, a sky and point lights as light). At every
 // path vertex each point light is sampled with a shadow ray (next-event estimation) and adds
 // albedo · intensity · cos θ when visible, with no distance falloff (the BART scenes'
@@ -70,20 +70,14 @@ fn cosine_direction(n: vec3<f32>, rng: ptr<function, u32>) -> vec3<f32> {
     return normalize(t * (r * cos(phi)) + bt * (r * sin(phi)) + n * sqrt(max(0.0, 1.0 - r2)));
 }
 
-// A path being traced: its next bounce ray (origin, dir), the bounce rays traced (`depth`), the
-// throughput and radiance so far, and its pending shadow ray: towards light `light` (none when
-// `light` = light_count) from `origin`, with the radiance it adds when nothing blocks it.
+// A path being traced: its next ray (origin, dir), the rays it has traced (`depth`), its
+// throughput and the radiance it has gathered.
 struct PathState {
     origin: vec3<f32>,
     depth: u32,
     dir: vec3<f32>,
-    light: u32,
     throughput: vec3<f32>,
-    shadow_distance: f32,
     radiance: vec3<f32>,
-    normal: vec3<f32>,
-    shadow_dir: vec3<f32>,
-    shadow_radiance: vec3<f32>,
 }
 
 // A new path of the pixel at `coords` from the camera (a jittered primary ray).
@@ -94,27 +88,7 @@ fn start_path(coords: vec2<u32>, rng: ptr<function, u32>) -> PathState {
         1.0 - 2.0 * (f32(coords.y) + jitter.y) / f32(params.height),
     );
     let dir = normalize(params.forward + ndc.x * params.right + ndc.y * params.up);
-    let zero = vec3<f32>(0.0);
-    return PathState(params.eye, 0u, dir, params.light_count, vec3<f32>(1.0), 0.0, zero, zero, zero, zero);
-}
-
-// The path's next shadow ray: towards the first light from `first` on that lies above the surface
-// at the path's vertex (next-event estimation), or none (`light` = light_count).
-fn next_shadow_ray(path: ptr<function, PathState>, first: u32) {
-    var l = first;
-    for (; l < params.light_count; l++) {
-        let light = lights[l];
-        let to_light = light.position - (*path).origin;
-        let distance = length(to_light);
-        let cos_theta = dot((*path).normal, to_light) / max(distance, 1e-30);
-        if cos_theta > 0.0 {
-            (*path).shadow_dir = to_light / distance;
-            (*path).shadow_distance = distance;
-            (*path).shadow_radiance = (*path).throughput * light.intensity * cos_theta;
-            break;
-        }
-    }
-    (*path).light = l;
+    return PathState(params.eye, 0u, dir, vec3<f32>(1.0), vec3<f32>(0.0));
 }
 
 @compute @workgroup_size(8, 8, 1)
@@ -133,54 +107,54 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
         let pixel = coords.y * params.width + coords.x;
         var rng = pcg_hash(pixel ^ pcg_hash(params.seed));
         var sum = vec3<f32>(0.0);
-        // One loop over all the invocation's rays, one traversal per iteration: a path that ends
-        // starts the pixel's next one at once, and shadow and bounce rays share the traversal,
-        // so the invocations of a SIMD batch (a warp) wait for each other only at the end of
-        // all their paths, not at the end of every path or ray kind. (The shadow rays in an inner
-        // loop over the lights, with a traversal call of their own, traced lavapipe's light
-        // scenes up to 15 % faster, but on an NVIDIA H200 most of crytek_sponza's wide-layout
-        // paths then ended early: README, "Wide vs binary: measurements".)
+        // One loop over the bounce rays of all the pixel's paths: a path that ends starts the
+        // pixel's next one at once, so the invocations of a SIMD batch (a warp) wait for each
+        // other at the end of all their paths, not at the end of every path. The shadow rays of
+        // a path vertex are traced together, light by light, as the batch's invocations reach it
+        // (against one traversal call site shared by shadow and bounce rays: an NVIDIA H200's
+        // trace 8-16 % faster in the binary layout, 0-3 % in the wide one; README, "Wide vs
+        // binary: measurements").
         var path = start_path(coords, &rng);
         var samples_done = 0u;
         loop {
-            let shadow = path.light < params.light_count;
-            let ray_dir = select(path.dir, path.shadow_dir, shadow);
-            let t_max = select(3.0e38, path.shadow_distance, shadow);
-            let traced = traverse(path.origin, ray_dir, 0.0, t_max, params.opaque_zero, shadow, &stack);
+            let traced = traverse(path.origin, path.dir, 0.0, 3.0e38, params.opaque_zero, false, &stack);
             rays++;
             overflows += traced.overflow;
             let hit = traced.hit;
-            var ended = false;
-            if shadow {
-                if hit.tri == MISS {
-                    path.radiance += path.shadow_radiance;
-                }
-                next_shadow_ray(&path, path.light + 1u);
-                ended = path.light == params.light_count && path.depth == params.max_depth;
+            path.depth++;
+            var ended = path.depth == params.max_depth;
+            if hit.tri == MISS {
+                path.radiance += path.throughput * sky_radiance(path.dir);
+                ended = true;
             } else {
-                path.depth++;
-                if hit.tri == MISS {
-                    path.radiance += path.throughput * sky_radiance(path.dir);
-                    ended = true;
-                } else {
-                    let tri = load_triangle(hit.tri);
-                    let material = materials[tri.material];
-                    path.radiance += path.throughput * material.emission;
-                    path.throughput *= material.albedo;
-                    var n = normalize(cross(tri.v1 - tri.v0, tri.v2 - tri.v0));
-                    if dot(n, path.dir) > 0.0 {
-                        n = -n;
-                    }
-                    let p = path.origin + hit.t * path.dir;
-                    let eps = 1e-4 * max(1.0, max(abs(p.x), max(abs(p.y), abs(p.z))));
-                    path.origin = p + n * eps;
-                    path.normal = n;
-                    next_shadow_ray(&path, 0u);
-                    // Drawn now, used after the shadow rays: the pixel's random numbers are drawn
-                    // in the same order as a path at a time, ray by ray.
-                    path.dir = cosine_direction(n, &rng);
-                    ended = path.light == params.light_count && path.depth == params.max_depth;
+                let tri = load_triangle(hit.tri);
+                let material = materials[tri.material];
+                path.radiance += path.throughput * material.emission;
+                path.throughput *= material.albedo;
+                var n = normalize(cross(tri.v1 - tri.v0, tri.v2 - tri.v0));
+                if dot(n, path.dir) > 0.0 {
+                    n = -n;
                 }
+                let p = path.origin + hit.t * path.dir;
+                let eps = 1e-4 * max(1.0, max(abs(p.x), max(abs(p.y), abs(p.z))));
+                path.origin = p + n * eps;
+                for (var l = 0u; l < params.light_count; l++) {
+                    let light = lights[l];
+                    let to_light = light.position - path.origin;
+                    let distance = length(to_light);
+                    let cos_theta = dot(n, to_light) / max(distance, 1e-30);
+                    if cos_theta > 0.0 {
+                        let shadow = traverse(path.origin, to_light / distance, 0.0, distance, params.opaque_zero, true, &stack);
+                        rays++;
+                        overflows += shadow.overflow;
+                        if shadow.hit.tri == MISS {
+                            path.radiance += path.throughput * light.intensity * cos_theta;
+                        }
+                    }
+                }
+                // Drawn after every bounce, the last one too: the pixel's random numbers are
+                // drawn in the same order as a path at a time.
+                path.dir = cosine_direction(n, &rng);
             }
             if ended {
                 sum += path.radiance;
