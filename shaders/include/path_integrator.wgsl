@@ -70,8 +70,8 @@ fn cosine_direction(n: vec3<f32>, rng: ptr<function, u32>) -> vec3<f32> {
     return normalize(t * (r * cos(phi)) + bt * (r * sin(phi)) + n * sqrt(max(0.0, 1.0 - r2)));
 }
 
-// A path being traced: its next ray (origin, dir), the rays it has traced (`depth`), its
-// throughput and the radiance it has gathered.
+// A path being traced: its next bounce ray (origin, dir), the bounce rays it has traced (`depth`;
+// its shadow rays are not counted there), its throughput and the radiance it has gathered.
 struct PathState {
     origin: vec3<f32>,
     depth: u32,
