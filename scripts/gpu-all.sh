@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Everything a lent GPU is asked to measure, in one `device` call that fits a short lease, step by
 # step in this order (the trace's correctness and the build's figures first): the test binaries
-# ("tests"), the binary-vs-wide table ("layouts"), build scaling with each GPU builder's schedule
+# ("tests"), the treelet rounds' lowest levels per subtree at each height beside by level
+# ("subtrees"), the binary-vs-wide table ("layouts"), build scaling with each GPU builder's schedule
 # tuned ("scaling"), the round schedules each fixed beside the default and the tuned one (the
 # DP's forms in the dispatched levels and the climb, the overlapped rounds, the team threshold
 # TEAMS, and levels dispatched where LEVELS is set: "schedules"), the changes of scripts/variants/
@@ -34,7 +35,7 @@ save() { tar -C $res -czf "$final/results.tar.gz" .; }
 step() {
   local name=$1 cap=$2 left
   shift 2
-  case " ${STEPS:-tests layouts scaling schedules variants widelevels probe profile kernels} " in
+  case " ${STEPS:-tests subtrees layouts scaling schedules variants widelevels probe profile kernels} " in
     *" $name "*) ;;
     *) return ;;
   esac
@@ -94,6 +95,20 @@ wide_levels() {
   done
 }
 export -f wide_levels
+# The rounds' lowest levels per subtree (`--subtree-levels`: one dispatch for K levels, a
+# workgroup per few subtrees) at each height beside by level (0), the levels above dispatched by
+# default; then at 8 with fewer levels above dispatched (the rest climbed). The same tree each time.
+subtrees() {
+  for s in conference sibenik crytek_sponza field:707 field:2000; do
+    timeout 40 $TREELET bench --scene $s --builder trbvh --subtree-levels 0,2,4,6,8 --tune-schedule off \
+      $small >> $res/subtrees.jsonl
+    timeout 30 $TREELET bench --scene $s --builder trbvh --subtree-levels 8 --level-dispatches 8,10,12 \
+      --tune-schedule off $small >> $res/subtrees.jsonl
+  done
+  timeout 40 $TREELET bench --scene conference --builder trbvh-split --subtree-levels 0,4,8 --tune-schedule off \
+    $small >> $res/subtrees.jsonl
+}
+export -f subtrees
 export small base work
 tests() {
   # shellcheck disable=SC2016
@@ -102,6 +117,7 @@ tests() {
 }
 export -f tests
 step tests 150 bash -c tests
+step subtrees 120 bash -c subtrees
 # The trace first: both layouts on every scene (their ray counts must agree), then the variants.
 step layouts 80 env SCENES="conference crytek_sponza sibenik lost_empire armadillo" OPTIMAL_SCENES="conference lost_empire" \
   REPEATS=11 bash scripts/gpu-layouts.sh
@@ -141,6 +157,15 @@ res = sys.argv[1]
 def rows(name):
     p = os.path.join(res, name)
     return [json.loads(l) for l in open(p) if l.startswith("{")] if os.path.exists(p) else []
+print("subtrees.jsonl: scene, builder, subtree levels, level dispatches asked, build ms (min/median/max),"
+      " treelets ms, climb ms, dispatches, SAH")
+for r in rows("subtrees.jsonl"):
+    b = r.get("build_ms_spread") or {}
+    st = r.get("stages_ms") or {}
+    print(f"  {os.path.basename(r['scene'])[:14]:14} {r['builder']:11} {r.get('subtree_levels')!s:>2}"
+          f" {r.get('level_dispatches')!s:>4} {b.get('min', 0):7.2f} {r['build_ms']:7.2f} {b.get('max', 0):7.2f}"
+          f" {st.get('treelets') or 0:7.3f} {st.get('treelets climb') or 0:6.3f} {r['dispatches']:4}"
+          f" {r.get('sah') or 0:.4f}")
 print("widelevels.jsonl: scene, wide levels, level dispatches asked, wide stage ms, build ms")
 for r in rows("widelevels.jsonl"):
     print(f"  {os.path.basename(r['scene'])[:14]:14} {r.get('wide_levels') or 0:3} {r.get('wide_level_dispatches')!s:>4}"

@@ -12,7 +12,9 @@
 // the slots of the roots it found together, one atomic per level), and the workgroup
 // that finishes last (a ticket in the schedule buffer; no workgroup waits for another) writes
 // each dispatched level's indirect arguments from the final counts: a workgroup per treelet
-// below params.team_below treelets, else per 32 treelets (treelets_optimize.wgsl).
+// below params.team_below treelets, else per 32 treelets (treelets_optimize.wgsl). With subtrees
+// (params.subtree_levels = K > 0) the levels up to K have no bucket: the cut roots (of level K at
+// most, whose parent is above K, or the tree's root) take level 1's (subtrees_optimize.wgsl).
 // The first round's climb also builds the LBVH over the sorted keys, as lbvh_climb.wgsl does for a
 // plain LBVH: its hierarchy (Karras 2012's radix tree and layout, found bottom-up as in Apetrei
 // 2014: radix_climb.wgsl) with the parent links, and its boxes (Karras 2012 §4), each leaf's from
@@ -71,9 +73,18 @@ fn child_level(child: u32) -> u32 {
 var<workgroup> workgroup_roots: array<atomic<u32>, MAX_LEVEL_DISPATCHES + 1u>;
 var<workgroup> workgroup_slots: array<u32, MAX_LEVEL_DISPATCHES + 1u>;
 
-// Whether roots of `level` (0: no root) go into a bucket: levels 1 ..= level_dispatches + 1.
-fn is_bucketed(level: u32) -> bool {
-    return level != 0u && level <= params.level_dispatches + 1u;
+// The bucket of a root of level `level` (0: no root) that is no cut root: its level's, if that
+// level is bucketed (1 ..= level_dispatches + 1, those up to params.subtree_levels excepted); 0:
+// none.
+fn level_bucket(level: u32) -> u32 {
+    let bucketed = level > params.subtree_levels && level <= params.level_dispatches + 1u;
+    return select(0u, level, bucketed);
+}
+
+// With subtrees (params.subtree_levels = K > 0), the bucket of a root of level `level` (0: no
+// root) whose parent is above K: level 1's if it is a cut root (of level K at most), else none.
+fn cut_bucket(level: u32) -> u32 {
+    return select(0u, 1u, level != 0u && level <= params.subtree_levels);
 }
 
 // Once the workgroup has counted its roots per level: reserves their slots, one device atomic
@@ -89,25 +100,24 @@ fn reserve_workgroup_slots(lid: u32) {
     workgroupBarrier();
 }
 
-// Puts the root `node` of level `level` (0: no root here) into its level's bucket, if that level
-// is bucketed: the workgroup counts its roots per level and reserves their slots with one device
-// atomic per level, not one per root on the level's word (which a GPU serializes). Every
-// invocation of the workgroup calls it (uniform control flow).
-fn bucket_together(node: u32, level: u32, lid: u32) {
-    let bucketed = is_bucketed(level);
+// Puts the root `node` into bucket `bucket` (level_bucket, cut_bucket; 0: none): the workgroup
+// counts its roots per bucket and reserves their slots with one device atomic per bucket, not one
+// per root on the bucket's word (which a GPU serializes). Every invocation of the workgroup calls
+// it (uniform control flow).
+fn bucket_together(node: u32, bucket: u32, lid: u32) {
     var rank = 0u;
-    if bucketed {
-        rank = atomicAdd(&workgroup_roots[level - 1u], 1u);
+    if bucket != 0u {
+        rank = atomicAdd(&workgroup_roots[bucket - 1u], 1u);
     }
     reserve_workgroup_slots(lid);
-    if bucketed {
-        roots[level_start(level) + workgroup_slots[level - 1u] + rank] = node;
+    if bucket != 0u {
+        roots[level_start(bucket) + workgroup_slots[bucket - 1u] + rank] = node;
     }
 }
 
-// The first round's roots of bucketed levels, queued by the workgroup during its climb (node,
-// level, rank in the level) and bucketed together after it; a root past the queue's room is
-// bucketed on its own (`bucket`). A workgroup finishes about one node per invocation, plus the
+// The first round's roots of bucketed levels and its cut roots, queued by the workgroup during its
+// climb (node, bucket, rank in the bucket) and bucketed together after it; a root past the
+// queue's room is bucketed on its own (`bucket_alone`). A workgroup finishes about one node per invocation, plus the
 // climbs above its leaves: a queue of two per invocation holds most of a workgroup's roots (the
 // rest, from the long climbs near the top, take an atomic each; CPU devices' 8-wide workgroups
 // use both paths).
@@ -116,21 +126,21 @@ var<workgroup> root_queue: array<vec3<u32>, ROOT_QUEUE>;
 var<workgroup> queued_roots: atomic<u32>;
 var<workgroup> queue_length: u32;
 
-// Adds the root `node` of a bucketed level `level` to its bucket, with a device atomic of its own.
-fn bucket(node: u32, level: u32) {
-    roots[level_start(level) + atomicAdd(&schedule[level - 1u], 1u)] = node;
+// Adds the root `node` to bucket `bucket` (>= 1), with a device atomic of its own.
+fn bucket_alone(node: u32, bucket: u32) {
+    roots[level_start(bucket) + atomicAdd(&schedule[bucket - 1u], 1u)] = node;
 }
 
-// Queues the root `node` of level `level` (>= 1) for `bucket_queue`, if its level is bucketed.
-fn queue_root(node: u32, level: u32) {
-    if !is_bucketed(level) {
+// Queues the root `node` for bucket `bucket` (0: none) for `bucket_queue`.
+fn queue_root(node: u32, bucket: u32) {
+    if bucket == 0u {
         return;
     }
     let at = atomicAdd(&queued_roots, 1u);
     if at < ROOT_QUEUE {
-        root_queue[at] = vec3<u32>(node, level, 0u);
+        root_queue[at] = vec3<u32>(node, bucket, 0u);
     } else {
-        bucket(node, level);
+        bucket_alone(node, bucket);
     }
 }
 
@@ -153,16 +163,21 @@ fn bucket_queue(lid: u32) {
 }
 
 // A later round's schedule: internal node j (if it is one) zeroes its arrival word and buckets
-// itself if it roots a treelet. Call from uniform control flow.
+// itself if it roots a treelet (node 0 roots the tree; a root's parent roots a treelet too, so
+// its level is this round's). Call from uniform control flow.
 fn bucket_internal_node(j: u32, n: u32, lid: u32) {
-    var level = 0u;
+    var bucket = 0u;
     if j + 1u < n {
         atomicStore(&arrivals[j], 0u);
         if is_root(j) {
-            level = atomicLoad(&levels[j]);
+            let level = atomicLoad(&levels[j]);
+            bucket = level_bucket(level);
+            if level <= params.subtree_levels && (j == 0u || atomicLoad(&levels[parents[j]]) > params.subtree_levels) {
+                bucket = cut_bucket(level);
+            }
         }
     }
-    bucket_together(j, level, lid);
+    bucket_together(j, bucket, lid);
 }
 
 // The last workgroup: each dispatched level's indirect arguments, from its root count, the
@@ -170,7 +185,13 @@ fn bucket_internal_node(j: u32, n: u32, lid: u32) {
 fn write_dispatch_args(lid: u32) {
     for (var level = lid + 1u; level <= params.level_dispatches; level += WORKGROUP_WIDTH) {
         let size = atomicLoad(&schedule[level - 1u]);
-        let groups = select((size + OPTIMIZE_WORKGROUP - 1u) / OPTIMIZE_WORKGROUP, size, size < params.team_below);
+        // A workgroup per 32 treelets, per team's treelet, or per subtrees_per_workgroup() cut
+        // roots (subtrees_optimize.wgsl).
+        var per_group = select(OPTIMIZE_WORKGROUP, 1u, size < params.team_below);
+        if level == 1u && params.subtree_levels != 0u {
+            per_group = subtrees_per_workgroup();
+        }
+        let groups = (size + per_group - 1u) / per_group;
         let y = (groups + MAX_WORKGROUPS_X - 1u) / MAX_WORKGROUPS_X;
         let at = SCHEDULE_ARGS + 3u * (level - 1u);
         atomicStore(&schedule[at], select(0u, (groups + y - 1u) / max(y, 1u), y > 0u));
@@ -179,14 +200,17 @@ fn write_dispatch_args(lid: u32) {
     }
 }
 
-// The climbing node's count, cost and level (what it stored), carried up the climb: only the
+// The climbing node, its count, cost and level (what it stored), carried up the climb: only the
 // sibling's are loaded.
+var<private> climbing_node: u32;
 var<private> climbing_prims: u32;
 var<private> climbing_cost: f32;
 var<private> climbing_level: u32;
 
 // The first round's climb: a parent's count, cost and level from its children (emit_parent
-// stored its children, links and box), and its bucket if it roots a treelet.
+// stored its children, links and box), and its bucket if it roots a treelet; with subtrees, a
+// parent above their levels buckets its children that are cut roots, and the tree's root is one
+// if it is not above them.
 fn finish_parent(p: EmittedParent) {
     let node = p.range.node;
     let other = p.sibling;
@@ -198,10 +222,18 @@ fn finish_parent(p: EmittedParent) {
     var level = 0u;
     if prims >= params.gamma {
         let own_level = select(0u, climbing_level, climbing_prims >= params.gamma);
-        level = max(own_level, child_level(other)) + 1u;
-        queue_root(node, level);
+        let other_level = child_level(other);
+        level = max(own_level, other_level) + 1u;
+        if level > params.subtree_levels {
+            queue_root(node, level_bucket(level));
+            queue_root(climbing_node, cut_bucket(own_level));
+            queue_root(other, cut_bucket(other_level));
+        } else if node == 0u {
+            queue_root(node, 1u);
+        }
     }
     atomicStore(&levels[node], level);
+    climbing_node = node;
     climbing_prims = prims;
     climbing_cost = cost;
     climbing_level = level;
@@ -225,6 +257,7 @@ fn main(
     } else if has_leaf {
         leaf_box = prim_boxes[order[j]];
         leaf = emit_leaf(j, leaf_box);
+        climbing_node = leaf.node;
         climbing_prims = 1u;
         climbing_cost = params.ct * surface_area(leaf_box.min, leaf_box.max, params.zero);
         climbing_level = 0u;

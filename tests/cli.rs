@@ -257,6 +257,23 @@ fn bench_compares_dp_forms_on_the_same_tree() {
     }
 }
 
+/// `bench --subtree-levels 0,4,8` measures trbvh with each round's lowest levels by level and
+/// per subtree of 4 and 8 levels, reports the height, and builds the same tree with each.
+#[test]
+fn bench_subtree_levels_reports_each_height() {
+    let records = quick_bench("trbvh", &["--subtree-levels", "0,4,8"]);
+    let heights: Vec<_> = records
+        .iter()
+        .map(|r| r["subtree_levels"].as_u64())
+        .collect();
+    assert_eq!(heights, [Some(0), Some(4), Some(8)]);
+    for record in &records {
+        assert_eq!(record["valid"], true);
+        assert_eq!(record["sah"], records[0]["sah"]);
+        assert_eq!(record["nodes"], records[0]["nodes"]);
+    }
+}
+
 /// `bench --round-overlap none,6,7` measures trbvh with the rounds one after another and
 /// overlapped at each reach, reports the reach (null for none), and builds the same tree at
 /// reaches 6 and 7 (the scene's overlapped rounds give the sequential tree); a reach below the
@@ -290,6 +307,24 @@ fn bench_round_overlap_reports_each_reach() {
     let stderr = String::from_utf8_lossy(&refused.stderr);
     assert!(
         stderr.contains("round overlap reach of 5 is below 6, the least for treelets of 7 leaves"),
+        "{stderr}"
+    );
+    // Overlapped rounds find their own waves: not with subtrees.
+    let refused = treelet(&[
+        "bench",
+        "--scene",
+        "cornell",
+        "--builder",
+        "trbvh",
+        "--round-overlap",
+        "6",
+        "--subtree-levels",
+        "4",
+    ]);
+    assert!(!refused.status.success());
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert!(
+        stderr.contains("either overlap or take subtrees, not both"),
         "{stderr}"
     );
 }

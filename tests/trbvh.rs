@@ -13,7 +13,7 @@ use treelet::bvh::lbvh::{build_lbvh_from_boxes_cpu, prim_boxes_cpu, TRBVH_KEY_BI
 use treelet::bvh::treelet::{
     build_trbvh_cpu, optimize_lbvh_cpu, overlap_reach, solve_treelet, subsets_by_size,
     surface_area, CostModel, RoundSchedule, TrbvhBuilder, TreeletDp, TreeletLeaf, TreeletSettings,
-    WorkingTree, MAX_LEVEL_DISPATCHES,
+    WorkingTree, MAX_LEVEL_DISPATCHES, MAX_SUBTREE_LEVELS,
 };
 use treelet::bvh::wide::{validate_wide_with_references, Layout, WideOptions};
 use treelet::bvh::{
@@ -426,6 +426,74 @@ fn every_level_schedule_agrees_with_the_cpu_twin() {
     }
 }
 
+/// The lowest levels of each round optimized per subtree (`RoundSchedule::subtree_levels`,
+/// kernel `subtrees_optimize`) build the tree of the levels dispatched one by one, exactly, for
+/// every subtree height (1: each subtree one treelet; the most: a few subtrees per workgroup),
+/// with the levels above them dispatched or climbed, every treelet size (a kernel each), small
+/// inputs whose tree's root is a subtree's, and pre-split references; and the CPU twin agrees.
+#[test]
+fn subtrees_build_the_tree_of_the_levels_one_by_one() {
+    let builder =
+        &mut TrbvhBuilder::new(gpu(), TreeletSettings::BALANCED, SahParams::default()).unwrap();
+    let model = CostModel::from(&builder.sah);
+    let inputs = [
+        (random_soup(3000, 51), TreeletSettings::BALANCED),
+        (random_soup(60, 52), TreeletSettings::BALANCED),
+        (random_soup(1500, 54), TreeletSettings::HIGH_QUALITY),
+        (
+            load_scene("field-10k").unwrap().triangles,
+            TreeletSettings {
+                split_percent: 30,
+                ..TreeletSettings::FAST
+            },
+        ),
+        (
+            random_soup(2000, 53),
+            TreeletSettings {
+                treelet_size: 3,
+                rounds: 2,
+                split_percent: 0,
+            },
+        ),
+    ];
+    for (triangles, settings) in inputs {
+        builder.settings = settings;
+        let scene = scene_of(triangles);
+        let geometry = Geometry::upload(gpu(), &scene).unwrap();
+        builder.set_schedule(RoundSchedule::default());
+        let by_level = builder.build_stages(gpu(), &geometry).unwrap();
+        let cpu = optimize_lbvh_cpu(by_level.lbvh.clone(), &settings, &model);
+        assert_optimizer_agrees(&by_level.working, &cpu, &builder.sah);
+        // (subtree levels, level dispatches): the levels above the subtrees' dispatched by
+        // default, all climbed (a count below the subtrees' counts as theirs), or one dispatched.
+        let schedules = [
+            (1, None),
+            (2, Some(0)),
+            (4, Some(5)),
+            (MAX_SUBTREE_LEVELS, None),
+        ];
+        for (levels, dispatches) in schedules {
+            builder.set_schedule(RoundSchedule {
+                subtree_levels: Some(levels),
+                level_dispatches: dispatches,
+                ..RoundSchedule::default()
+            });
+            let stages = builder.build_stages(gpu(), &geometry).unwrap();
+            let what = format!(
+                "{} triangles, {settings:?}, subtree levels {levels}, level dispatches \
+                 {dispatches:?}",
+                scene.triangles.len()
+            );
+            assert!(
+                stages.working == by_level.working,
+                "{what}: not the tree of the levels one by one"
+            );
+            assert_eq!(stages.bvh, by_level.bvh, "{what}: collapsed tree");
+        }
+    }
+    builder.set_schedule(RoundSchedule::default());
+}
+
 /// The teams' subset table: every subset of 8 leaves once, by size; within a size the subsets of
 /// the first m leaves come first (a team of an m-leaf treelet reads only those).
 #[test]
@@ -486,7 +554,7 @@ fn teams_lone_invocations_and_dp_forms_build_the_same_tree() {
                     team_below: Some(below),
                     dp: Some(dp),
                     climb_dp: Some(climb_dp),
-                    overlap: None,
+                    ..RoundSchedule::default()
                 });
                 trees.push(builder.build_stages(gpu(), &geometry).unwrap());
             }

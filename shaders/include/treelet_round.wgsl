@@ -39,6 +39,13 @@ struct RoundParams {
     rounds: u32,
     reach: u32,
     wave: u32,
+    // K > 0: the treelets of levels 1 ..= K are optimized per subtree, a workgroup each
+    // (subtrees_optimize.wgsl), whose roots (the cut roots: of level K at most, their parent
+    // above K or none) take level 1's bucket; levels 2 ..= K have none. 0: by level.
+    subtree_levels: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 }
 
 // The schedule buffer (u32 words): per level L = 1 ..= MAX_LEVEL_DISPATCHES + 1, the number of
@@ -57,6 +64,15 @@ fn level_start(level: u32) -> u32 {
         first += params.count / (params.gamma + l - 1u);
     }
     return first;
+}
+
+// Invocations per workgroup of subtrees_optimize.wgsl.
+const SUBTREE_WORKGROUP: u32 = 32u;
+
+// Subtrees per workgroup of subtrees_optimize.wgsl (params.subtree_levels = K > 0): as many as
+// its list holds when each has the most roots, 2^K - 1, and at most one per invocation.
+fn subtrees_per_workgroup() -> u32 {
+    return min(SUBTREE_LIST / ((1u << params.subtree_levels) - 1u), SUBTREE_WORKGROUP);
 }
 
 // Cost of a node of area a and n primitives whose children cost `children` in total:

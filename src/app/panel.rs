@@ -425,7 +425,8 @@ fn schedule(ui: &mut egui::Ui, info: &ScheduleInfo, actions: &mut PanelActions) 
     }
     let tune = ui.button("Tune schedule").on_hover_text(
         "Time the build's schedules on this device and scene and keep the fastest (treelet \
-         rounds overlapped or one after another, DP forms, teams, dispatched levels; the sort's \
+         rounds overlapped, one after another or their lowest levels per subtree, DP forms, teams, \
+         dispatched levels; the sort's \
          tile; the wide conversion's dispatched levels): every schedule builds the same tree, \
          which the tuning checks. Waits for about a hundred \
          builds (on a GPU a second or less; on a CPU device up to minutes); on a GPU it runs \

@@ -1,5 +1,6 @@
 //! Build-schedule tuning. A build's schedule (`BuildSchedule`: the treelet rounds' —
-//! `RoundSchedule`: the rounds one after another or overlapped, the lone DP's form in the
+//! `RoundSchedule`: the rounds one after another, overlapped or with their lowest levels per
+//! subtree, the lone DP's form in the
 //! dispatched levels and in the climb, the team threshold, the levels given a dispatch — the radix
 //! sort's tile and the wide conversion's level dispatches) never changes the tree (tests), so it
 //! sets only the build's time, and which one is fastest depends on the device and the tree.
@@ -28,6 +29,9 @@ use crate::{Error, Result};
 /// Team thresholds a tuning tries (treelets per level below which teams of 32 optimize them; 0:
 /// never).
 const TEAM_THRESHOLDS: [u32; 4] = [0, 4, 16, 256];
+/// Treelet levels per round optimized per subtree that a tuning tries (0: none; see
+/// `RoundSchedule::subtree_levels`).
+const SUBTREE_LEVEL_CHOICES: [u32; 4] = [0, 4, 6, 8];
 /// How far from the device's default the treelet level dispatches a tuning tries lie (the
 /// overlapped rounds dispatch this many waves per round, and may want fewer).
 const LEVEL_DISPATCH_STEPS: [i32; 3] = [-6, -3, 3];
@@ -89,6 +93,7 @@ pub struct TuningSpace {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct SchedulePins {
     pub overlap: bool,
+    pub subtree_levels: bool,
     pub dp: bool,
     pub climb_dp: bool,
     pub team_below: bool,
@@ -162,6 +167,7 @@ pub struct TunedSchedule {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Dimension {
     Overlap,
+    Subtrees,
     Dp,
     ClimbDp,
     TeamBelow,
@@ -171,8 +177,9 @@ enum Dimension {
 }
 
 impl Dimension {
-    const ALL: [Dimension; 7] = [
+    const ALL: [Dimension; 8] = [
         Dimension::Overlap,
+        Dimension::Subtrees,
         Dimension::Dp,
         Dimension::ClimbDp,
         Dimension::TeamBelow,
@@ -184,6 +191,7 @@ impl Dimension {
     fn is_pinned(self, pins: &SchedulePins) -> bool {
         match self {
             Dimension::Overlap => pins.overlap,
+            Dimension::Subtrees => pins.subtree_levels,
             Dimension::Dp => pins.dp,
             Dimension::ClimbDp => pins.climb_dp,
             Dimension::TeamBelow => pins.team_below,
@@ -202,13 +210,43 @@ impl Dimension {
     }
 
     /// The schedules that differ from `kept` in this dimension alone and run differently.
-    fn alternatives(self, kept: BuildSchedule, space: &TuningSpace) -> Vec<BuildSchedule> {
+    /// Overlapped rounds and subtrees exclude each other: a candidate of one drops the other
+    /// (none where the other is pinned on).
+    fn alternatives(
+        self,
+        kept: BuildSchedule,
+        space: &TuningSpace,
+        pins: &SchedulePins,
+    ) -> Vec<BuildSchedule> {
         let rounds = |r: RoundSchedule| BuildSchedule { rounds: r, ..kept };
         let k = kept.rounds;
         let values: Vec<BuildSchedule> = match self {
             Dimension::Overlap => [None, Some(space.overlap_reach)]
-                .map(|overlap| rounds(RoundSchedule { overlap, ..k }))
-                .to_vec(),
+                .into_iter()
+                .filter(|overlap| {
+                    overlap.is_none() || !pins.subtree_levels || k.subtree_levels() == 0
+                })
+                .map(|overlap| {
+                    let subtree_levels = k.subtree_levels.filter(|_| overlap.is_none());
+                    rounds(RoundSchedule {
+                        overlap,
+                        subtree_levels,
+                        ..k
+                    })
+                })
+                .collect(),
+            Dimension::Subtrees => SUBTREE_LEVEL_CHOICES
+                .into_iter()
+                .filter(|&levels| levels == 0 || !pins.overlap || k.overlap.is_none())
+                .map(|levels| {
+                    let overlap = k.overlap.filter(|_| levels == 0);
+                    rounds(RoundSchedule {
+                        subtree_levels: Some(levels),
+                        overlap,
+                        ..k
+                    })
+                })
+                .collect(),
             // The climb keeps its form (by default it follows the dispatched levels').
             Dimension::Dp => [TreeletDp::Unrolled, TreeletDp::Loop]
                 .map(|dp| {
@@ -281,6 +319,7 @@ impl Dimension {
         let (ra, rb) = (a.rounds, b.rounds);
         match self {
             Dimension::Overlap => ra.overlap == rb.overlap,
+            Dimension::Subtrees => ra.subtree_levels() == rb.subtree_levels(),
             Dimension::Dp => ra.dp() == rb.dp(),
             Dimension::ClimbDp => ra.climb_dp() == rb.climb_dp(),
             Dimension::TeamBelow => ra.team_below() == rb.team_below(),
@@ -342,6 +381,7 @@ fn without_defaults(schedule: BuildSchedule, space: &TuningSpace) -> BuildSchedu
             dp: r.dp.filter(|&dp| dp != TreeletDp::default()),
             climb_dp: r.climb_dp.filter(|&dp| dp != r.dp()),
             overlap: r.overlap,
+            subtree_levels: r.subtree_levels.filter(|&levels| levels != 0),
         },
         sort_tile_items: schedule
             .sort_tile_items
@@ -396,7 +436,7 @@ pub fn tune_schedule(
             .into_iter()
             .filter(|d| d.applies(space) && !d.is_pinned(&options.pins));
         for dimension in free {
-            for candidate in dimension.alternatives(kept, space) {
+            for candidate in dimension.alternatives(kept, space, &options.pins) {
                 let was_refused = refused
                     .iter()
                     .any(|(d, r)| *d == dimension && d.same_value(*r, candidate, space));
@@ -620,14 +660,17 @@ mod tests {
         wide_levels: Some(20),
     };
 
-    /// A build time with one best value per dimension: overlap 6, the loop DP in the climb,
-    /// teams below 16, 11 dispatched levels, tiles of 16 keys per invocation, 14 wide levels
-    /// dispatched.
+    /// A build time with one best value per dimension: overlap 6 (else subtrees of 6 levels),
+    /// the loop DP in the climb, teams below 16, 11 dispatched levels, tiles of 16 keys per
+    /// invocation, 14 wide levels dispatched.
     fn cost(b: BuildSchedule) -> f64 {
         let s = b.rounds;
         let mut ms = 10.0;
         if s.overlap.is_none() {
             ms += 3.0;
+        }
+        if s.subtree_levels() == 6 {
+            ms -= 1.0;
         }
         if s.team_below() == 16 {
             ms -= 0.5;
@@ -696,6 +739,12 @@ mod tests {
         assert!(timed
             .iter()
             .any(|s| s.rounds.overlap.is_some() && s.rounds.team_below.is_some()));
+        // Subtrees were tried before the overlap was kept, never with it.
+        assert!(timed.iter().any(|s| s.rounds.subtree_levels() == 6));
+        assert!(timed
+            .iter()
+            .all(|s| s.rounds.overlap.is_none() || s.rounds.subtree_levels() == 0));
+        assert_eq!(kept.rounds.subtree_levels(), 0);
         assert_eq!(tuned.builds as usize, timed.len() + tuned.trials.len());
     }
 
@@ -767,8 +816,9 @@ mod tests {
         assert!(timed.iter().all(|s| s.rounds.overlap.is_none()
             && s.rounds.level_dispatches == Some(14)
             && s.sort_tile_items == Some(32)));
-        // Teams below 16 pay.
+        // Teams below 16 pay, and without the overlap subtrees of 6 levels.
         assert_eq!(tuned.schedule.rounds.team_below(), 16);
+        assert_eq!(tuned.schedule.rounds.subtree_levels(), 6);
         assert_eq!(tuned.schedule.rounds.climb_dp(), TreeletDp::Loop);
         assert_eq!(tuned.schedule.wide_level_dispatches, Some(14));
     }

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 use serde::Serialize;
 use treelet::anim::load_still;
-use treelet::bvh::treelet::{RoundSchedule, TreeletDp, MAX_LEVEL_DISPATCHES};
+use treelet::bvh::treelet::{RoundSchedule, TreeletDp, MAX_LEVEL_DISPATCHES, MAX_SUBTREE_LEVELS};
 use treelet::bvh::wide::{
     validate_wide, validate_wide_with_references, wide_sah_costs, Layout, WideCollapse,
     WideOptions, MAX_WIDE_LEVEL_DISPATCHES,
@@ -77,6 +77,13 @@ pub struct BenchArgs {
     /// default: one round after another); trbvh, trbvh-split; a comma-separated list to compare
     #[arg(long, value_delimiter = ',')]
     round_overlap: Vec<Reach>,
+    /// Treelet levels per round optimized per subtree, 0-8: one dispatch, a workgroup per
+    /// subtree holding them, instead of a dispatch per level (default: 0, none; not with
+    /// --round-overlap); trbvh, trbvh-split; a comma-separated list to compare. The tree is the
+    /// same for every value
+    #[arg(long, value_delimiter = ',',
+          value_parser = clap::value_parser!(u32).range(0..=i64::from(MAX_SUBTREE_LEVELS)))]
+    subtree_levels: Vec<u32>,
     /// Tune the build schedule on this device and scene after the warm-up and before the timed
     /// builds: the options above, --sort-tile-items and --wide-level-dispatches, where they are
     /// not given, are varied one at a time from their defaults (every schedule builds the same
@@ -158,6 +165,7 @@ impl BenchArgs {
                 ("--treelet-dp", !self.treelet_dp.is_empty()),
                 ("--climb-dp", !self.climb_dp.is_empty()),
                 ("--round-overlap", !self.round_overlap.is_empty()),
+                ("--subtree-levels", !self.subtree_levels.is_empty()),
             ],
         )?;
         // No `--round-overlap` and `none` both mean one round after another.
@@ -171,13 +179,16 @@ impl BenchArgs {
                 for dp in or_default(&self.treelet_dp) {
                     for climb_dp in or_default(&self.climb_dp) {
                         for &overlap in &overlaps {
-                            schedules.push(RoundSchedule {
-                                level_dispatches,
-                                team_below,
-                                dp: dp.map(TreeletDp::from),
-                                climb_dp: climb_dp.map(TreeletDp::from),
-                                overlap,
-                            });
+                            for subtree_levels in or_default(&self.subtree_levels) {
+                                schedules.push(RoundSchedule {
+                                    level_dispatches,
+                                    team_below,
+                                    dp: dp.map(TreeletDp::from),
+                                    climb_dp: climb_dp.map(TreeletDp::from),
+                                    overlap,
+                                    subtree_levels,
+                                });
+                            }
                         }
                     }
                 }
@@ -199,6 +210,7 @@ impl BenchArgs {
         }
         let pins = SchedulePins {
             overlap: !self.round_overlap.is_empty(),
+            subtree_levels: !self.subtree_levels.is_empty(),
             dp: !self.treelet_dp.is_empty(),
             climb_dp: !self.climb_dp.is_empty(),
             team_below: !self.team_below.is_empty(),
@@ -270,6 +282,9 @@ struct BenchRecord {
     /// Treelet builders: the rounds' overlap reach (`--round-overlap`; null: one round after
     /// another).
     round_overlap: Option<u32>,
+    /// Treelet builders: the levels per round optimized per subtree (`--subtree-levels`; 0:
+    /// none).
+    subtree_levels: Option<u32>,
     /// GPU builders whose schedule was tuned (`--tune-schedule`): the tuning, whose kept
     /// schedule is the one in the schedule fields (these and `sort_tile_items`,
     /// `wide_level_dispatches`) and timed here.
@@ -460,7 +475,7 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
     // Refused before any run, not after the runs before it.
     for &(builder, schedule, _, _) in &runs {
         if let Some(settings) = builder.treelet_settings() {
-            schedule.check_overlap(settings.treelet_size)?;
+            schedule.check(settings.treelet_size)?;
         }
     }
     for &(builder, schedule, layout, wide_options) in &runs {
@@ -582,6 +597,9 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
                 .treelet_settings()
                 .map(|_| schedule.climb_dp().name()),
             round_overlap: schedule.overlap,
+            subtree_levels: builder
+                .treelet_settings()
+                .map(|_| schedule.subtree_levels()),
             schedule_tuning: report.tuned.as_ref().map(TuningRecord::from),
             sort_tile_items,
             key_bits: builder.morton_key_bits(scene.triangles.len() as u32),

@@ -54,6 +54,16 @@ pub const MIN_TREELET_SIZE: u32 = 3;
 /// Treelet levels a restructuring round gives one dispatch each at most; the levels above are
 /// climbed by one workgroup (`bvh::treelet`).
 pub const MAX_LEVEL_DISPATCHES: u32 = 32;
+/// Treelet levels a round optimizes per subtree at most (`RoundSchedule::subtree_levels`): a
+/// subtree of K levels holds up to 2^K − 1 treelet roots, which its workgroup lists
+/// (`subtrees_optimize.wgsl`).
+pub const MAX_SUBTREE_LEVELS: u32 = 8;
+const _: () = assert!(MAX_SUBTREE_LEVELS <= MAX_LEVEL_DISPATCHES);
+/// Treelet roots a workgroup of `subtrees_optimize.wgsl` lists at most (in workgroup memory): it
+/// takes as many subtrees as fit in the worst case, ⌊SUBTREE_LIST / (2^K − 1)⌋, at most one
+/// per invocation.
+pub const SUBTREE_LIST: u32 = 1024;
+const _: () = assert!(SUBTREE_LIST >= (1 << MAX_SUBTREE_LEVELS) - 1);
 /// Costs per binary node of the SAH-optimal wide collapse, C(n, 1..=7): the slot counts a wide
 /// node's expansion can give a child (`bvh::wide::OptimalCollapse`, costs_climb.wgsl).
 pub const COLLAPSE_COST_WORDS: u32 = 7;
@@ -92,6 +102,8 @@ pub fn wgsl() -> String {
         u32_const("MAX_GPU_LEAF_SIZE", MAX_GPU_LEAF_SIZE),
         u32_const("COLLAPSE_COST_WORDS", COLLAPSE_COST_WORDS),
         u32_const("MAX_LEVEL_DISPATCHES", MAX_LEVEL_DISPATCHES),
+        u32_const("MAX_SUBTREE_LEVELS", MAX_SUBTREE_LEVELS),
+        u32_const("SUBTREE_LIST", SUBTREE_LIST),
         f32_const("BOX_EXIT_SLACK", BOX_EXIT_SLACK),
         u32_const("RADIX_BITS", RADIX_BITS),
         u32_const("SCAN_BLOCK", SCAN_BLOCK),

@@ -16,6 +16,7 @@ mod nodes_compact;
 mod nodes_level;
 mod nodes_mark;
 mod rounds;
+mod subtrees_optimize;
 mod treelets_climb;
 mod treelets_optimize;
 mod waves;
@@ -27,6 +28,7 @@ pub use dp::{
 pub use nodes_compact::NODES_COMPACT;
 pub use nodes_level::NODES_LEVEL;
 pub use nodes_mark::NODES_MARK;
+pub use subtrees_optimize::SUBTREES_OPTIMIZE;
 pub use treelets_climb::TREELETS_CLIMB;
 pub use treelets_optimize::TREELETS_OPTIMIZE;
 pub use waves::{overlap_reach, WAVES_CLIMB, WAVES_FIND, WAVES_OPTIMIZE};
@@ -35,7 +37,7 @@ pub use dp_unrolled::TreeletDp;
 pub use rounds::RoundSchedule;
 
 pub use crate::gpu::constants::{
-    MAX_GPU_LEAF_SIZE, MAX_LEVEL_DISPATCHES, MAX_TREELET_SIZE, MIN_TREELET_SIZE,
+    MAX_GPU_LEAF_SIZE, MAX_LEVEL_DISPATCHES, MAX_SUBTREE_LEVELS, MAX_TREELET_SIZE, MIN_TREELET_SIZE,
 };
 
 use collapse::{Collapse, CollapseBuffers};
@@ -411,9 +413,7 @@ impl TrbvhBuilder {
         lbvh_out: Option<&mut Option<WorkingTree>>,
     ) -> Result<()> {
         self.settings.validate(&self.sah)?;
-        self.rounds
-            .schedule
-            .check_overlap(self.settings.treelet_size)?;
+        self.rounds.schedule.check(self.settings.treelet_size)?;
         let ctx = rec.ctx;
         let budget = split_budget(geometry.triangle_count, self.settings.split_percent);
         // The leaves: the triangles, or the references of pre-splitting (counted on the GPU).

@@ -21,7 +21,13 @@
 //! size when first used, the lone DP written out for it (`dp_unrolled`), or as loops on request
 //! (`RoundSchedule::dp` for the dispatched levels, `RoundSchedule::climb_dp` for the climb, for
 //! GPUs to compare; the same tree). On request the rounds run overlapped in waves instead
-//! (`RoundSchedule::overlap`, module `waves`), after the first round's schedule here.
+//! (`RoundSchedule::overlap`, module `waves`), after the first round's schedule here. On request
+//! the lowest K levels of a round take one dispatch (`RoundSchedule::subtree_levels`, kernel
+//! `subtrees_optimize`): the schedule buckets the roots of the disjoint subtrees that hold them
+//! (of level K at most, their parent above) in level 1's slots, and each workgroup optimizes a
+//! few of these subtrees depth by depth between workgroup barriers, where a dispatch per level
+//! pays its launch and the wait for its slowest treelet (a floor of ~24 µs a level on an H200;
+//! README, "Where a small treelet level's time goes"); the levels above as before.
 
 use std::sync::OnceLock;
 
@@ -30,10 +36,13 @@ use bytemuck::{Pod, Zeroable};
 use super::dp::{subsets_by_size, CostModel};
 use super::dp_unrolled::{TreeletDp, TREELET_DP_LOOP_OVERRIDE, TREELET_SIZE_OVERRIDE};
 use super::nodes_level::NODES_LEVEL;
+use super::subtrees_optimize::SUBTREES_OPTIMIZE;
 use super::treelets_climb::TREELETS_CLIMB;
 use super::treelets_optimize::TREELETS_OPTIMIZE;
 use super::waves::{overlap_reach, Overlap};
-use crate::gpu::constants::{MAX_LEVEL_DISPATCHES, MAX_TREELET_SIZE, MIN_TREELET_SIZE};
+use crate::gpu::constants::{
+    MAX_LEVEL_DISPATCHES, MAX_SUBTREE_LEVELS, MAX_TREELET_SIZE, MIN_TREELET_SIZE,
+};
 use crate::gpu::{
     storage_buffer, storage_buffer_zeroed, GpuContext, Grid, ItemCount, Kernel, KernelDecl, Pass,
     Recorder,
@@ -68,8 +77,12 @@ pub struct RoundParams {
     pub(crate) rounds: u32,
     pub(crate) reach: u32,
     pub(crate) wave: u32,
+    /// The levels up to this one are optimized per subtree (`RoundSchedule::subtree_levels`;
+    /// 0: by level, as the levels above).
+    subtree_levels: u32,
+    pad: [u32; 3],
 }
-const _: () = assert!(std::mem::size_of::<RoundParams>() == 64);
+const _: () = assert!(std::mem::size_of::<RoundParams>() == 80);
 
 impl RoundParams {
     /// The parameters of the overlapped rounds' kernels (`waves`) for a tree of `n` leaves:
@@ -93,6 +106,8 @@ impl RoundParams {
             rounds: overlap.rounds,
             reach: overlap.reach,
             wave,
+            subtree_levels: 0,
+            pad: [0; 3],
         }
     }
 }
@@ -204,21 +219,45 @@ pub struct RoundSchedule {
     /// treelet size (a build refuses less); None: the rounds one after another. The level dispatches (above) times the rounds are the waves dispatched, the
     /// climb takes the rest; teams apply to the climb's waves.
     pub overlap: Option<u32>,
+    /// Treelet levels 1 ..= K of each round optimized per subtree (`subtrees_optimize`), K at
+    /// most `MAX_SUBTREE_LEVELS`: one dispatch, a workgroup for each subtree whose root is of
+    /// level K at most and its parent above (it holds at most 2^K − 1 roots), the subtree's
+    /// treelets depth by depth between workgroup barriers instead of a dispatch per level. The
+    /// levels above as without it (at least K levels count as dispatched). None or 0: every
+    /// level by level. Not with overlapped rounds (a build refuses both).
+    pub subtree_levels: Option<u32>,
 }
 
 impl RoundSchedule {
     /// Fails when the rounds overlap with a reach below the least for treelets of
-    /// `treelet_size` leaves (`overlap_reach`): a wave's treelets could then share nodes.
-    pub fn check_overlap(&self, treelet_size: u32) -> Result<()> {
+    /// `treelet_size` leaves (`overlap_reach`): a wave's treelets could then share nodes; when
+    /// subtrees take more than `MAX_SUBTREE_LEVELS` levels (their roots would not fit a
+    /// workgroup's list); and when the rounds both overlap and take subtrees.
+    pub fn check(&self, treelet_size: u32) -> Result<()> {
         let least = overlap_reach(treelet_size);
+        let subtrees = self.subtree_levels();
         match self.overlap {
             Some(reach) if reach < least => Err(Error::InvalidArgument(format!(
                 "a round overlap reach of {reach} is below {least}, the least for treelets of \
                  {treelet_size} leaves (a treelet reaches that many levels below its root, so the \
                  treelets of one wave could share nodes)"
             ))),
+            _ if subtrees > MAX_SUBTREE_LEVELS => Err(Error::InvalidArgument(format!(
+                "subtrees of {subtrees} treelet levels exceed the most, {MAX_SUBTREE_LEVELS} (a \
+                 workgroup lists the up to 2^levels − 1 treelet roots of its subtree)"
+            ))),
+            Some(_) if subtrees > 0 => Err(Error::InvalidArgument(
+                "the treelet rounds either overlap or take subtrees, not both (the overlapped \
+                 rounds find their own waves)"
+                    .into(),
+            )),
             _ => Ok(()),
         }
+    }
+
+    /// The levels optimized per subtree (0: none).
+    pub fn subtree_levels(&self) -> u32 {
+        self.subtree_levels.unwrap_or(0)
     }
 
     /// The team threshold in effect.
@@ -237,7 +276,7 @@ impl RoundSchedule {
     }
 
     /// The options that are set, as `treelet bench` labels its runs ("d=14 t=16 dp=loop
-    /// climb-dp=loop overlap=6"; "default" when none is).
+    /// climb-dp=loop overlap=6 subtrees=6"; "default" when none is).
     pub fn label(&self) -> String {
         let mut parts = Vec::new();
         if let Some(levels) = self.level_dispatches {
@@ -254,6 +293,9 @@ impl RoundSchedule {
         }
         if let Some(reach) = self.overlap {
             parts.push(format!("overlap={reach}"));
+        }
+        if let Some(levels) = self.subtree_levels {
+            parts.push(format!("subtrees={levels}"));
         }
         if parts.is_empty() {
             return "default".into();
@@ -318,8 +360,10 @@ pub(crate) struct TreeletRounds {
     /// the declared width).
     climb_level: Kernel<RoundParams>,
     level: Kernel<RoundParams>,
-    /// `treelets_optimize` and `treelets_climb` per treelet size and DP form.
+    /// `treelets_optimize`, `subtrees_optimize` and `treelets_climb` per treelet size and DP
+    /// form.
     optimize: TreeletKernels,
+    subtrees: TreeletKernels,
     climb: TreeletKernels,
     /// `subsets_by_size`, read by the teams.
     subsets: wgpu::Buffer,
@@ -335,6 +379,7 @@ impl TreeletRounds {
             climb_level: Kernel::climb(ctx, &NODES_LEVEL),
             level: Kernel::new(ctx, &NODES_LEVEL),
             optimize: TreeletKernels::new(&TREELETS_OPTIMIZE),
+            subtrees: TreeletKernels::new(&SUBTREES_OPTIMIZE),
             climb: TreeletKernels::new(&TREELETS_CLIMB),
             subsets: storage_buffer(ctx, "treelet subsets by size", &subsets_by_size())?,
             roots: None,
@@ -342,12 +387,14 @@ impl TreeletRounds {
         })
     }
 
-    /// Levels of a round of `n` leaves and smallest root `gamma` that get a dispatch each.
+    /// Levels of a round of `n` leaves and smallest root `gamma` that get a dispatch each (those
+    /// optimized per subtree count as dispatched: the climb starts above them).
     pub(crate) fn dispatched(&self, n: u32, gamma: u32, device: wgpu::DeviceType) -> u32 {
         self.schedule
             .level_dispatches
             .unwrap_or_else(|| level_dispatches(n, gamma, device))
             .min(MAX_LEVEL_DISPATCHES)
+            .max(self.schedule.subtree_levels())
     }
 
     /// Grows the buckets for rounds of up to `n` leaves with these smallest roots (u32::MAX: a
@@ -411,11 +458,29 @@ impl TreeletRounds {
         ];
         // The GPU's u32 sum wraps; truncating the exact sum gives the same word.
         let first_slot = |level: u32| level_start(n, round.gamma, level) as u32;
+        let subtree_levels = params.subtree_levels;
         for level in 1..=dispatched {
             params.level = level;
             params.level_first = first_slot(level);
             let args = 4 * (SCHEDULE_ARGS + 3 * u64::from(level - 1));
-            pass.dispatch_indirect(optimize, state.schedule, args, &params, &treelet_buffers);
+            if level > subtree_levels {
+                pass.dispatch_indirect(optimize, state.schedule, args, &params, &treelet_buffers);
+            } else if level == 1 {
+                // The levels up to subtree_levels: one workgroup per cut root (level 1's bucket).
+                let subtrees = self
+                    .subtrees
+                    .get(ctx, round.treelet_size, self.schedule.dp());
+                let subtree_buffers = [
+                    state.nodes,
+                    state.parents,
+                    state.prim_counts,
+                    state.costs,
+                    state.schedule,
+                    roots,
+                    state.next_levels,
+                ];
+                pass.dispatch_indirect(subtrees, state.schedule, args, &params, &subtree_buffers);
+            }
         }
         drop(pass);
         params.level = dispatched + 1;
@@ -481,6 +546,12 @@ impl TreeletRounds {
             rounds: 0,
             reach: 0,
             wave: 0,
+            // The overlapped rounds take level 1's roots as the first wave (no subtrees).
+            subtree_levels: match self.schedule.overlap {
+                Some(_) => 0,
+                None => self.schedule.subtree_levels(),
+            },
+            pad: [0; 3],
         };
         let limit = count.limit(ctx);
         pass.dispatch(

@@ -1,0 +1,97 @@
+// Treelet round, step 2 per subtree (params.subtree_levels = K > 0): the treelets of levels
+// 1 ..= K in one dispatch instead of one per level. nodes_level.wgsl bucketed the cut roots into
+// level 1's bucket: the roots of level K at most whose parent is above K (or that root the tree).
+// Their subtrees are disjoint and hold every root of level K at most, each exactly once. A
+// workgroup takes subtrees_per_workgroup() of them (treelet_round.wgsl), lists their roots
+// breadth first (a root's child roots one depth below it: at most 2^K - 1 roots per subtree, as
+// a root of level l has at most two child roots, each of a lower level, and at most K depths) and
+// optimizes them a depth at a time, the deepest first, one treelet per invocation
+// (treelet_dp.wgsl), with a workgroup barrier between depths where the levels take a dispatch
+// each. A root is optimized after every root below it and no two roots of one depth share a node
+// (neither is below the other), so the tree is the one of the paper's bottom-up order (the CPU
+// twin `WorkingTree::optimize_round`; a treelet changes no node above its root, so the deeper
+// depths leave the roots listed where they were). The levels above K follow as without subtrees
+// (treelets_optimize.wgsl, treelets_climb.wgsl). Node data is only shared within the workgroup:
+// storageBarriers order it.
+#include "bvh_node.wgsl"
+#include "treelet_round.wgsl"
+
+@group(0) @binding(0) var<uniform> params: RoundParams;
+@group(0) @binding(1) var<storage, read_write> nodes: array<BvhNode>;
+@group(0) @binding(2) var<storage, read_write> parents: array<u32>;
+@group(0) @binding(3) var<storage, read_write> prim_counts: array<u32>;
+@group(0) @binding(4) var<storage, read_write> costs: array<f32>;
+@group(0) @binding(5) var<storage, read> schedule: array<u32>;
+@group(0) @binding(6) var<storage, read> roots: array<u32>;
+// The next round's level of each node a treelet finishes (treelet_dp.wgsl).
+@group(0) @binding(7) var<storage, read_write> next_levels: array<u32>;
+
+#include "treelet_dp.wgsl"
+
+// The subtrees' roots, breadth first.
+var<workgroup> subtree_roots: array<u32, SUBTREE_LIST>;
+var<workgroup> listed: atomic<u32>;
+// Workgroup-uniform copies: the cut roots (level 1's bucket), the roots listed after a depth.
+var<workgroup> cut_roots: u32;
+var<workgroup> listed_after: u32;
+
+@compute @workgroup_size(SUBTREE_WORKGROUP)
+fn main(
+    @builtin(local_invocation_index) lid: u32,
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+) {
+    if lid == 0u {
+        cut_roots = schedule[0];
+    }
+    let per_group = subtrees_per_workgroup();
+    let first = (wid.x + wid.y * groups.x) * per_group;
+    let size = workgroupUniformLoad(&cut_roots);
+    if first >= size {
+        return;
+    }
+    // Depth 0: the workgroup's cut roots.
+    var end = min(per_group, size - first);
+    for (var i = lid; i < end; i += SUBTREE_WORKGROUP) {
+        subtree_roots[i] = roots[first + i];
+    }
+    if lid == 0u {
+        atomicStore(&listed, end);
+    }
+    // Depth d's roots are subtree_roots[depth_start[d] .. depth_start[d + 1]], d < depths.
+    var depth_start: array<u32, MAX_SUBTREE_LEVELS + 1u>;
+    var depths = 0u;
+    var begin = 0u;
+    loop {
+        workgroupBarrier();
+        // The child roots of this depth's roots: the next depth.
+        for (var i = begin + lid; i < end; i += SUBTREE_WORKGROUP) {
+            let root = nodes[subtree_roots[i]];
+            for (var side = 0u; side < 2u; side++) {
+                let child = select(root.left_or_first, root.right_or_count, side == 1u);
+                if prim_counts[child] >= params.gamma {
+                    subtree_roots[atomicAdd(&listed, 1u)] = child;
+                }
+            }
+        }
+        workgroupBarrier();
+        if lid == 0u {
+            listed_after = atomicLoad(&listed);
+        }
+        let next_end = workgroupUniformLoad(&listed_after);
+        depths++;
+        depth_start[depths] = end;
+        if next_end == end {
+            break;
+        }
+        begin = end;
+        end = next_end;
+    }
+    // The deepest depth first; each depth's node data is stored before the depth above reads it.
+    for (var d = depths; d > 0u; d--) {
+        for (var i = depth_start[d - 1u] + lid; i < depth_start[d]; i += SUBTREE_WORKGROUP) {
+            optimize_treelet(subtree_roots[i]);
+        }
+        storageBarrier();
+    }
+}
