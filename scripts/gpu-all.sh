@@ -96,15 +96,19 @@ wide_levels() {
 }
 export -f wide_levels
 # The rounds' lowest levels per subtree (`--subtree-levels`: one dispatch for K levels, a
-# workgroup per few subtrees) at each height beside by level (0), the levels above dispatched by
-# default; then at 8 with fewer levels above dispatched (the rest climbed). The same tree each time.
+# workgroup per few subtrees) at each height beside by level (0), the default subtree width (64)
+# and the levels above dispatched by default; then at 6 with other widths (latency against
+# throughput: examples/subtree_schedule.rs counts both), and at 8 with fewer levels above
+# dispatched (the rest climbed). The same tree each time.
 subtrees() {
   for s in conference sibenik crytek_sponza field:707 field:2000; do
     timeout 40 $TREELET bench --scene $s --builder trbvh --subtree-levels 0,2,4,6,8 --tune-schedule off \
       $small >> $res/subtrees.jsonl
-    timeout 30 $TREELET bench --scene $s --builder trbvh --subtree-levels 8 --level-dispatches 8,10,12 \
+    timeout 30 $TREELET bench --scene $s --builder trbvh --subtree-levels 6 --subtree-width 32,128,1024 \
       --tune-schedule off $small >> $res/subtrees.jsonl
   done
+  timeout 30 $TREELET bench --scene conference --builder trbvh --subtree-levels 8 --level-dispatches 8,10,12 \
+    --tune-schedule off $small >> $res/subtrees.jsonl
   timeout 40 $TREELET bench --scene conference --builder trbvh-split --subtree-levels 0,4,8 --tune-schedule off \
     $small >> $res/subtrees.jsonl
 }
@@ -157,13 +161,13 @@ res = sys.argv[1]
 def rows(name):
     p = os.path.join(res, name)
     return [json.loads(l) for l in open(p) if l.startswith("{")] if os.path.exists(p) else []
-print("subtrees.jsonl: scene, builder, subtree levels, level dispatches asked, build ms (min/median/max),"
+print("subtrees.jsonl: scene, builder, subtree levels, width, level dispatches asked, build ms (min/median/max),"
       " treelets ms, climb ms, dispatches, SAH")
 for r in rows("subtrees.jsonl"):
     b = r.get("build_ms_spread") or {}
     st = r.get("stages_ms") or {}
     print(f"  {os.path.basename(r['scene'])[:14]:14} {r['builder']:11} {r.get('subtree_levels')!s:>2}"
-          f" {r.get('level_dispatches')!s:>4} {b.get('min', 0):7.2f} {r['build_ms']:7.2f} {b.get('max', 0):7.2f}"
+          f" {r.get('subtree_width')!s:>4} {r.get('level_dispatches')!s:>4} {b.get('min', 0):7.2f} {r['build_ms']:7.2f} {b.get('max', 0):7.2f}"
           f" {st.get('treelets') or 0:7.3f} {st.get('treelets climb') or 0:6.3f} {r['dispatches']:4}"
           f" {r.get('sah') or 0:.4f}")
 print("widelevels.jsonl: scene, wide levels, level dispatches asked, wide stage ms, build ms")

@@ -13,8 +13,9 @@
 // that finishes last (a ticket in the schedule buffer; no workgroup waits for another) writes
 // each dispatched level's indirect arguments from the final counts: a workgroup per treelet
 // below params.team_below treelets, else per 32 treelets (treelets_optimize.wgsl). With subtrees
-// (params.subtree_levels = K > 0) the levels up to K have no bucket: the cut roots (of level K at
-// most, whose parent is above K, or the tree's root) take level 1's (subtrees_optimize.wgsl).
+// (params.subtree_levels = K > 0) the buckets of levels 1 ..= K hold only the cut roots of their
+// level (of level K at most, whose parent is above K, or the tree's root), and level 1's
+// arguments count the workgroups of all K (subtrees_optimize.wgsl).
 // The first round's climb also builds the LBVH over the sorted keys, as lbvh_climb.wgsl does for a
 // plain LBVH: its hierarchy (Karras 2012's radix tree and layout, found bottom-up as in Apetrei
 // 2014: radix_climb.wgsl) with the parent links, and its boxes (Karras 2012 §4), each leaf's from
@@ -82,9 +83,9 @@ fn level_bucket(level: u32) -> u32 {
 }
 
 // With subtrees (params.subtree_levels = K > 0), the bucket of a root of level `level` (0: no
-// root) whose parent is above K: level 1's if it is a cut root (of level K at most), else none.
+// root) whose parent is above K: its level's if it is a cut root (of level K at most), else none.
 fn cut_bucket(level: u32) -> u32 {
-    return select(0u, 1u, level != 0u && level <= params.subtree_levels);
+    return select(0u, level, level <= params.subtree_levels);
 }
 
 // Once the workgroup has counted its roots per level: reserves their slots, one device atomic
@@ -185,13 +186,17 @@ fn bucket_internal_node(j: u32, n: u32, lid: u32) {
 fn write_dispatch_args(lid: u32) {
     for (var level = lid + 1u; level <= params.level_dispatches; level += WORKGROUP_WIDTH) {
         let size = atomicLoad(&schedule[level - 1u]);
-        // A workgroup per 32 treelets, per team's treelet, or per subtrees_per_workgroup() cut
-        // roots (subtrees_optimize.wgsl).
-        var per_group = select(OPTIMIZE_WORKGROUP, 1u, size < params.team_below);
+        // A workgroup per 32 treelets or per team's treelet; with subtrees, level 1's workgroups
+        // are those of every level's cut roots (subtrees_optimize.wgsl).
+        let per_group = select(OPTIMIZE_WORKGROUP, 1u, size < params.team_below);
+        var groups = (size + per_group - 1u) / per_group;
         if level == 1u && params.subtree_levels != 0u {
-            per_group = subtrees_per_workgroup();
+            groups = 0u;
+            for (var l = 1u; l <= params.subtree_levels; l++) {
+                let per = subtrees_per_workgroup(l);
+                groups += (atomicLoad(&schedule[l - 1u]) + per - 1u) / per;
+            }
         }
-        let groups = (size + per_group - 1u) / per_group;
         let y = (groups + MAX_WORKGROUPS_X - 1u) / MAX_WORKGROUPS_X;
         let at = SCHEDULE_ARGS + 3u * (level - 1u);
         atomicStore(&schedule[at], select(0u, (groups + y - 1u) / max(y, 1u), y > 0u));
@@ -229,7 +234,7 @@ fn finish_parent(p: EmittedParent) {
             queue_root(climbing_node, cut_bucket(own_level));
             queue_root(other, cut_bucket(other_level));
         } else if node == 0u {
-            queue_root(node, 1u);
+            queue_root(node, level);
         }
     }
     atomicStore(&levels[node], level);

@@ -1,10 +1,11 @@
 // Treelet round, step 2 per subtree (params.subtree_levels = K > 0): the treelets of levels
-// 1 ..= K in one dispatch instead of one per level. nodes_level.wgsl bucketed the cut roots into
-// level 1's bucket: the roots of level K at most whose parent is above K (or that root the tree).
-// Their subtrees are disjoint and hold every root of level K at most, each exactly once. A
-// workgroup takes subtrees_per_workgroup() of them (treelet_round.wgsl), lists their roots
-// breadth first (a root's child roots one depth below it: at most 2^K - 1 roots per subtree, as
-// a root of level l has at most two child roots, each of a lower level, and at most K depths) and
+// 1 ..= K in one dispatch instead of one per level. nodes_level.wgsl bucketed the cut roots, the
+// roots of level K at most whose parent is above K (or that root the tree), each in its level's
+// bucket. Their subtrees are disjoint and hold every root of level K at most, each exactly once.
+// A workgroup takes subtrees_per_workgroup(l) cut roots of one level l (treelet_round.wgsl; the
+// workgroups of level 1's cut roots first, then level 2's, ...), lists their roots breadth first
+// (a root's child roots one depth below it: at most 2^l - 1 roots per subtree, as a root of level
+// l has at most two child roots, each of a lower level, and at most l depths) and
 // optimizes them a depth at a time, the deepest first, one treelet per invocation
 // (treelet_dp.wgsl), with a workgroup barrier between depths where the levels take a dispatch
 // each. A root is optimized after every root below it and no two roots of one depth share a node
@@ -31,8 +32,10 @@
 // The subtrees' roots, breadth first.
 var<workgroup> subtree_roots: array<u32, SUBTREE_LIST>;
 var<workgroup> listed: atomic<u32>;
-// Workgroup-uniform copies: the cut roots (level 1's bucket), the roots listed after a depth.
+// The workgroup's cut roots: how many and where they start in the roots buffer; the roots listed
+// after a depth (workgroup-uniform copies).
 var<workgroup> cut_roots: u32;
+var<workgroup> cut_first: u32;
 var<workgroup> listed_after: u32;
 
 @compute @workgroup_size(SUBTREE_WORKGROUP)
@@ -42,16 +45,28 @@ fn main(
     @builtin(num_workgroups) groups: vec3<u32>,
 ) {
     if lid == 0u {
-        cut_roots = schedule[0];
-    }
-    let per_group = subtrees_per_workgroup();
-    let first = (wid.x + wid.y * groups.x) * per_group;
-    let size = workgroupUniformLoad(&cut_roots);
-    if first >= size {
-        return;
+        // The workgroups of the levels' cut roots one level after another, as nodes_level.wgsl
+        // counted them.
+        var group = wid.x + wid.y * groups.x;
+        cut_roots = 0u;
+        for (var level = 1u; level <= params.subtree_levels; level++) {
+            let count = schedule[level - 1u];
+            let per = subtrees_per_workgroup(level);
+            let level_groups = (count + per - 1u) / per;
+            if group < level_groups {
+                cut_roots = min(per, count - group * per);
+                cut_first = level_start(level) + group * per;
+                break;
+            }
+            group -= level_groups;
+        }
     }
     // Depth 0: the workgroup's cut roots.
-    var end = min(per_group, size - first);
+    var end = workgroupUniformLoad(&cut_roots);
+    if end == 0u {
+        return;
+    }
+    let first = cut_first;
     for (var i = lid; i < end; i += SUBTREE_WORKGROUP) {
         subtree_roots[i] = roots[first + i];
     }

@@ -258,7 +258,8 @@ fn bench_compares_dp_forms_on_the_same_tree() {
 }
 
 /// `bench --subtree-levels 0,4,8` measures trbvh with each round's lowest levels by level and
-/// per subtree of 4 and 8 levels, reports the height, and builds the same tree with each.
+/// per subtree of 4 and 8 levels, reports the height and the width in effect, and builds the
+/// same tree with each.
 #[test]
 fn bench_subtree_levels_reports_each_height() {
     let records = quick_bench("trbvh", &["--subtree-levels", "0,4,8"]);
@@ -267,6 +268,12 @@ fn bench_subtree_levels_reports_each_height() {
         .map(|r| r["subtree_levels"].as_u64())
         .collect();
     assert_eq!(heights, [Some(0), Some(4), Some(8)]);
+    // The width in effect with subtrees: a CPU device's (the list filled).
+    let widths: Vec<_> = records
+        .iter()
+        .map(|r| r["subtree_width"].as_u64())
+        .collect();
+    assert_eq!(widths, [None, Some(1024), Some(1024)]);
     for record in &records {
         assert_eq!(record["valid"], true);
         assert_eq!(record["sah"], records[0]["sah"]);
@@ -356,9 +363,10 @@ fn bench_tunes_the_schedule_on_request() {
     for (record, untuned) in tuned.iter().zip(&untuned) {
         let trials = record["schedule_tuning"]["trials"].as_array().unwrap();
         let treelets = record["builder"] == "trbvh";
-        // trbvh: the DP forms (2), the team thresholds (3), the level dispatches (3) and the
-        // sort tiles (2, the CPU device's default being 32) at least; lbvh: the sort tiles.
-        assert!(trials.len() >= if treelets { 10 } else { 2 }, "{trials:?}");
+        // trbvh: the subtree levels (3), the DP forms (2), the team thresholds (3), the level
+        // dispatches (3) and the sort tiles (2, the CPU device's default being 32) at least;
+        // lbvh: the sort tiles.
+        assert!(trials.len() >= if treelets { 13 } else { 2 }, "{trials:?}");
         for trial in trials {
             assert_eq!(trial["other_tree"], false, "{trial}");
             assert!(trial["kept_ms"].as_f64().unwrap() > 0.0);
@@ -389,6 +397,13 @@ fn bench_tunes_the_schedule_on_request() {
             };
             assert_eq!(record["treelet_dp"], dp, "{kept} {record}");
             assert!(record["round_overlap"].is_null());
+            let subtrees = value("subtrees=").map_or(0, |k| k.parse().unwrap());
+            assert_eq!(record["subtree_levels"], subtrees, "{kept} {record}");
+            if subtrees > 0 {
+                // The CPU device's width unless another was kept.
+                let width = value("subtree-width=").map_or(1024, |w| w.parse().unwrap());
+                assert_eq!(record["subtree_width"], width, "{kept} {record}");
+            }
         }
         assert_eq!(record["valid"], true);
         assert_eq!(record["sah"], untuned["sah"]);

@@ -428,9 +428,10 @@ fn every_level_schedule_agrees_with_the_cpu_twin() {
 
 /// The lowest levels of each round optimized per subtree (`RoundSchedule::subtree_levels`,
 /// kernel `subtrees_optimize`) build the tree of the levels dispatched one by one, exactly, for
-/// every subtree height (1: each subtree one treelet; the most: a few subtrees per workgroup),
-/// with the levels above them dispatched or climbed, every treelet size (a kernel each), small
-/// inputs whose tree's root is a subtree's, and pre-split references; and the CPU twin agrees.
+/// subtree heights from 1 (each subtree one treelet) to the most, with the levels above them
+/// dispatched or climbed, a workgroup's list filled or a subtree or a lowest depth per
+/// invocation (`subtree_width`), treelet sizes 3, 5, 7 and 8 (a kernel each), small inputs whose
+/// tree's root is a subtree's, and pre-split references; and the CPU twin agrees.
 #[test]
 fn subtrees_build_the_tree_of_the_levels_one_by_one() {
     let builder =
@@ -464,24 +465,29 @@ fn subtrees_build_the_tree_of_the_levels_one_by_one() {
         let by_level = builder.build_stages(gpu(), &geometry).unwrap();
         let cpu = optimize_lbvh_cpu(by_level.lbvh.clone(), &settings, &model);
         assert_optimizer_agrees(&by_level.working, &cpu, &builder.sah);
-        // (subtree levels, level dispatches): the levels above the subtrees' dispatched by
-        // default, all climbed (a count below the subtrees' counts as theirs), or one dispatched.
+        // (subtree levels, level dispatches, subtree width): the levels above the subtrees'
+        // dispatched by default, all climbed (a count below the subtrees' counts as theirs), or
+        // one dispatched; the workgroups' lists filled (lavapipe's default), a lowest depth per
+        // invocation (GPUs'), or one subtree each.
         let schedules = [
-            (1, None),
-            (2, Some(0)),
-            (4, Some(5)),
-            (MAX_SUBTREE_LEVELS, None),
+            (1, None, None),
+            (2, Some(0), Some(32)),
+            (4, Some(5), None),
+            (6, None, Some(1)),
+            (MAX_SUBTREE_LEVELS, None, None),
+            (MAX_SUBTREE_LEVELS, None, Some(32)),
         ];
-        for (levels, dispatches) in schedules {
+        for (levels, dispatches, width) in schedules {
             builder.set_schedule(RoundSchedule {
                 subtree_levels: Some(levels),
                 level_dispatches: dispatches,
+                subtree_width: width,
                 ..RoundSchedule::default()
             });
             let stages = builder.build_stages(gpu(), &geometry).unwrap();
             let what = format!(
                 "{} triangles, {settings:?}, subtree levels {levels}, level dispatches \
-                 {dispatches:?}",
+                 {dispatches:?}, width {width:?}",
                 scene.triangles.len()
             );
             assert!(

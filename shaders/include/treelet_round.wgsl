@@ -39,13 +39,16 @@ struct RoundParams {
     rounds: u32,
     reach: u32,
     wave: u32,
-    // K > 0: the treelets of levels 1 ..= K are optimized per subtree, a workgroup each
-    // (subtrees_optimize.wgsl), whose roots (the cut roots: of level K at most, their parent
-    // above K or none) take level 1's bucket; levels 2 ..= K have none. 0: by level.
+    // K > 0: the treelets of levels 1 ..= K are optimized per subtree, a few subtrees per
+    // workgroup (subtrees_optimize.wgsl), whose roots (the cut roots: of level K at most, their
+    // parent above K or none) take the buckets of their levels (the only roots there), and level
+    // 1's indirect arguments count the workgroups of all K. 0: by level.
     subtree_levels: u32,
+    // The most cut roots of level l a workgroup of subtrees_optimize.wgsl takes besides its
+    // list's bound: subtree_width >> (l - 1), at least 1 (`subtrees_per_workgroup`).
+    subtree_width: u32,
     pad0: u32,
     pad1: u32,
-    pad2: u32,
 }
 
 // The schedule buffer (u32 words): per level L = 1 ..= MAX_LEVEL_DISPATCHES + 1, the number of
@@ -69,10 +72,15 @@ fn level_start(level: u32) -> u32 {
 // Invocations per workgroup of subtrees_optimize.wgsl.
 const SUBTREE_WORKGROUP: u32 = 32u;
 
-// Subtrees per workgroup of subtrees_optimize.wgsl (params.subtree_levels = K > 0): as many as
-// its list holds when each has the most roots, 2^K - 1, and at most one per invocation.
-fn subtrees_per_workgroup() -> u32 {
-    return min(SUBTREE_LIST / ((1u << params.subtree_levels) - 1u), SUBTREE_WORKGROUP);
+// Subtrees per workgroup of subtrees_optimize.wgsl whose cut roots are of level `level`: as many
+// as its list holds when each has the most roots, 2^level - 1, at most one per invocation, and
+// at most params.subtree_width >> (level - 1) (at least one): a subtree of level l has up to
+// 2^(l - 1) roots at its lowest depth, so a width of 32 keeps about one lowest depth per
+// invocation (the workgroup's steps about its depths: latency) and a width of SUBTREE_LIST or
+// more fills the list (fewer idle invocations in the top depths: throughput).
+fn subtrees_per_workgroup(level: u32) -> u32 {
+    let bound = min(SUBTREE_LIST / ((1u << level) - 1u), SUBTREE_WORKGROUP);
+    return min(bound, max(params.subtree_width >> (level - 1u), 1u));
 }
 
 // Cost of a node of area a and n primitives whose children cost `children` in total:

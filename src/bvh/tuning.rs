@@ -32,6 +32,9 @@ const TEAM_THRESHOLDS: [u32; 4] = [0, 4, 16, 256];
 /// Treelet levels per round optimized per subtree that a tuning tries (0: none; see
 /// `RoundSchedule::subtree_levels`).
 const SUBTREE_LEVEL_CHOICES: [u32; 4] = [0, 4, 6, 8];
+/// Subtree widths a tuning tries where the rounds take subtrees (`RoundSchedule::subtree_width`:
+/// about one, two or four lowest depths of a subtree per invocation, or the list filled).
+const SUBTREE_WIDTH_CHOICES: [u32; 4] = [32, 64, 128, 1024];
 /// How far from the device's default the treelet level dispatches a tuning tries lie (the
 /// overlapped rounds dispatch this many waves per round, and may want fewer).
 const LEVEL_DISPATCH_STEPS: [i32; 3] = [-6, -3, 3];
@@ -84,6 +87,8 @@ pub struct TuningSpace {
     pub round_levels_vary: bool,
     /// The reach the overlapped rounds take (`treelet::overlap_reach` of the treelet size).
     pub overlap_reach: u32,
+    /// The device's subtree width (`RoundSchedule::subtree_width` unset).
+    pub subtree_width: u32,
     pub sort_tile_items: u32,
     pub wide_levels: Option<u32>,
 }
@@ -94,6 +99,7 @@ pub struct TuningSpace {
 pub struct SchedulePins {
     pub overlap: bool,
     pub subtree_levels: bool,
+    pub subtree_width: bool,
     pub dp: bool,
     pub climb_dp: bool,
     pub team_below: bool,
@@ -168,6 +174,7 @@ pub struct TunedSchedule {
 enum Dimension {
     Overlap,
     Subtrees,
+    SubtreeWidth,
     Dp,
     ClimbDp,
     TeamBelow,
@@ -177,9 +184,10 @@ enum Dimension {
 }
 
 impl Dimension {
-    const ALL: [Dimension; 8] = [
+    const ALL: [Dimension; 9] = [
         Dimension::Overlap,
         Dimension::Subtrees,
+        Dimension::SubtreeWidth,
         Dimension::Dp,
         Dimension::ClimbDp,
         Dimension::TeamBelow,
@@ -192,6 +200,7 @@ impl Dimension {
         match self {
             Dimension::Overlap => pins.overlap,
             Dimension::Subtrees => pins.subtree_levels,
+            Dimension::SubtreeWidth => pins.subtree_width,
             Dimension::Dp => pins.dp,
             Dimension::ClimbDp => pins.climb_dp,
             Dimension::TeamBelow => pins.team_below,
@@ -247,6 +256,16 @@ impl Dimension {
                     })
                 })
                 .collect(),
+            // The width matters only where the rounds take subtrees.
+            Dimension::SubtreeWidth if k.subtree_levels() == 0 => Vec::new(),
+            Dimension::SubtreeWidth => SUBTREE_WIDTH_CHOICES
+                .map(|width| {
+                    rounds(RoundSchedule {
+                        subtree_width: Some(width),
+                        ..k
+                    })
+                })
+                .to_vec(),
             // The climb keeps its form (by default it follows the dispatched levels').
             Dimension::Dp => [TreeletDp::Unrolled, TreeletDp::Loop]
                 .map(|dp| {
@@ -320,6 +339,10 @@ impl Dimension {
         match self {
             Dimension::Overlap => ra.overlap == rb.overlap,
             Dimension::Subtrees => ra.subtree_levels() == rb.subtree_levels(),
+            Dimension::SubtreeWidth => {
+                (ra.subtree_levels() == 0 && rb.subtree_levels() == 0)
+                    || same_count(ra.subtree_width, rb.subtree_width, space.subtree_width)
+            }
             Dimension::Dp => ra.dp() == rb.dp(),
             Dimension::ClimbDp => ra.climb_dp() == rb.climb_dp(),
             Dimension::TeamBelow => ra.team_below() == rb.team_below(),
@@ -382,6 +405,9 @@ fn without_defaults(schedule: BuildSchedule, space: &TuningSpace) -> BuildSchedu
             climb_dp: r.climb_dp.filter(|&dp| dp != r.dp()),
             overlap: r.overlap,
             subtree_levels: r.subtree_levels.filter(|&levels| levels != 0),
+            subtree_width: r
+                .subtree_width
+                .filter(|&w| r.subtree_levels() > 0 && w != space.subtree_width),
         },
         sort_tile_items: schedule
             .sort_tile_items
@@ -656,11 +682,13 @@ mod tests {
         round_levels: Some(14),
         round_levels_vary: false,
         overlap_reach: 6,
+        subtree_width: 64,
         sort_tile_items: 8,
         wide_levels: Some(20),
     };
 
-    /// A build time with one best value per dimension: overlap 6 (else subtrees of 6 levels),
+    /// A build time with one best value per dimension: overlap 6 (else subtrees of 6 levels, of
+    /// width 128),
     /// the loop DP in the climb, teams below 16, 11 dispatched levels, tiles of 16 keys per
     /// invocation, 14 wide levels dispatched.
     fn cost(b: BuildSchedule) -> f64 {
@@ -671,6 +699,9 @@ mod tests {
         }
         if s.subtree_levels() == 6 {
             ms -= 1.0;
+            if s.subtree_width == Some(128) {
+                ms -= 0.3;
+            }
         }
         if s.team_below() == 16 {
             ms -= 0.5;
@@ -745,6 +776,10 @@ mod tests {
             .iter()
             .all(|s| s.rounds.overlap.is_none() || s.rounds.subtree_levels() == 0));
         assert_eq!(kept.rounds.subtree_levels(), 0);
+        // Widths were tried with subtrees only.
+        assert!(timed
+            .iter()
+            .all(|s| s.rounds.subtree_width.is_none() || s.rounds.subtree_levels() > 0));
         assert_eq!(tuned.builds as usize, timed.len() + tuned.trials.len());
     }
 
@@ -755,6 +790,7 @@ mod tests {
             round_levels: None,
             round_levels_vary: false,
             overlap_reach: 0,
+            subtree_width: 64,
             sort_tile_items: 8,
             wide_levels: None,
         };
@@ -819,6 +855,7 @@ mod tests {
         // Teams below 16 pay, and without the overlap subtrees of 6 levels.
         assert_eq!(tuned.schedule.rounds.team_below(), 16);
         assert_eq!(tuned.schedule.rounds.subtree_levels(), 6);
+        assert_eq!(tuned.schedule.rounds.subtree_width, Some(128));
         assert_eq!(tuned.schedule.rounds.climb_dp(), TreeletDp::Loop);
         assert_eq!(tuned.schedule.wide_level_dispatches, Some(14));
     }

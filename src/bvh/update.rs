@@ -269,6 +269,7 @@ impl TreeUpdater {
             round_levels,
             round_levels_vary,
             overlap_reach,
+            subtree_width: RoundSchedule::default().subtree_width(device),
             sort_tile_items: context_tile_items(ctx, prims),
             wide_levels: self
                 .converter

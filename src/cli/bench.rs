@@ -10,7 +10,9 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 use serde::Serialize;
 use treelet::anim::load_still;
-use treelet::bvh::treelet::{RoundSchedule, TreeletDp, MAX_LEVEL_DISPATCHES, MAX_SUBTREE_LEVELS};
+use treelet::bvh::treelet::{
+    RoundSchedule, TreeletDp, MAX_LEVEL_DISPATCHES, MAX_SUBTREE_LEVELS, SUBTREE_LIST,
+};
 use treelet::bvh::wide::{
     validate_wide, validate_wide_with_references, wide_sah_costs, Layout, WideCollapse,
     WideOptions, MAX_WIDE_LEVEL_DISPATCHES,
@@ -84,6 +86,14 @@ pub struct BenchArgs {
     #[arg(long, value_delimiter = ',',
           value_parser = clap::value_parser!(u32).range(0..=i64::from(MAX_SUBTREE_LEVELS)))]
     subtree_levels: Vec<u32>,
+    /// With --subtree-levels: how many subtrees a workgroup takes, at most this >> (l − 1) of
+    /// level l (and as many as its list of 1024 roots holds, at most 32): 32 keeps a workgroup's
+    /// steps near its subtrees' depths (latency), 1024 fills the list (throughput; default: 64
+    /// on GPUs, 1024 on CPU devices); a comma-separated list to compare. The tree is the same for
+    /// every value
+    #[arg(long, value_delimiter = ',',
+          value_parser = clap::value_parser!(u32).range(1..=i64::from(SUBTREE_LIST)))]
+    subtree_width: Vec<u32>,
     /// Tune the build schedule on this device and scene after the warm-up and before the timed
     /// builds: the options above, --sort-tile-items and --wide-level-dispatches, where they are
     /// not given, are varied one at a time from their defaults (every schedule builds the same
@@ -166,6 +176,7 @@ impl BenchArgs {
                 ("--climb-dp", !self.climb_dp.is_empty()),
                 ("--round-overlap", !self.round_overlap.is_empty()),
                 ("--subtree-levels", !self.subtree_levels.is_empty()),
+                ("--subtree-width", !self.subtree_width.is_empty()),
             ],
         )?;
         // No `--round-overlap` and `none` both mean one round after another.
@@ -180,14 +191,17 @@ impl BenchArgs {
                     for climb_dp in or_default(&self.climb_dp) {
                         for &overlap in &overlaps {
                             for subtree_levels in or_default(&self.subtree_levels) {
-                                schedules.push(RoundSchedule {
-                                    level_dispatches,
-                                    team_below,
-                                    dp: dp.map(TreeletDp::from),
-                                    climb_dp: climb_dp.map(TreeletDp::from),
-                                    overlap,
-                                    subtree_levels,
-                                });
+                                for subtree_width in or_default(&self.subtree_width) {
+                                    schedules.push(RoundSchedule {
+                                        level_dispatches,
+                                        team_below,
+                                        dp: dp.map(TreeletDp::from),
+                                        climb_dp: climb_dp.map(TreeletDp::from),
+                                        overlap,
+                                        subtree_levels,
+                                        subtree_width,
+                                    });
+                                }
                             }
                         }
                     }
@@ -211,6 +225,7 @@ impl BenchArgs {
         let pins = SchedulePins {
             overlap: !self.round_overlap.is_empty(),
             subtree_levels: !self.subtree_levels.is_empty(),
+            subtree_width: !self.subtree_width.is_empty(),
             dp: !self.treelet_dp.is_empty(),
             climb_dp: !self.climb_dp.is_empty(),
             team_below: !self.team_below.is_empty(),
@@ -285,6 +300,8 @@ struct BenchRecord {
     /// Treelet builders: the levels per round optimized per subtree (`--subtree-levels`; 0:
     /// none).
     subtree_levels: Option<u32>,
+    /// Treelet builders with subtrees: the subtree width in effect (`--subtree-width`).
+    subtree_width: Option<u32>,
     /// GPU builders whose schedule was tuned (`--tune-schedule`): the tuning, whose kept
     /// schedule is the one in the schedule fields (these and `sort_tile_items`,
     /// `wide_level_dispatches`) and timed here.
@@ -600,6 +617,10 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
             subtree_levels: builder
                 .treelet_settings()
                 .map(|_| schedule.subtree_levels()),
+            subtree_width: builder
+                .treelet_settings()
+                .filter(|_| schedule.subtree_levels() > 0)
+                .map(|_| schedule.subtree_width(gpu.info.device_type)),
             schedule_tuning: report.tuned.as_ref().map(TuningRecord::from),
             sort_tile_items,
             key_bits: builder.morton_key_bits(scene.triangles.len() as u32),

@@ -36,7 +36,7 @@ enum Command {
     /// Render a scene to a PNG file (headless)
     Render(render::RenderArgs),
     /// Build and trace a scene, print one JSON object per builder
-    Bench(bench::BenchArgs),
+    Bench(Box<bench::BenchArgs>),
     /// List the built-in and shared scene names
     Scenes,
     /// Open the interactive viewer (the default when a display is available)

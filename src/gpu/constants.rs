@@ -60,8 +60,8 @@ pub const MAX_LEVEL_DISPATCHES: u32 = 32;
 pub const MAX_SUBTREE_LEVELS: u32 = 8;
 const _: () = assert!(MAX_SUBTREE_LEVELS <= MAX_LEVEL_DISPATCHES);
 /// Treelet roots a workgroup of `subtrees_optimize.wgsl` lists at most (in workgroup memory): it
-/// takes as many subtrees as fit in the worst case, ⌊SUBTREE_LIST / (2^K − 1)⌋, at most one
-/// per invocation.
+/// takes as many subtrees of level l as fit in the worst case, ⌊SUBTREE_LIST / (2^l − 1)⌋, at
+/// most one per invocation.
 pub const SUBTREE_LIST: u32 = 1024;
 const _: () = assert!(SUBTREE_LIST >= (1 << MAX_SUBTREE_LEVELS) - 1);
 /// Costs per binary node of the SAH-optimal wide collapse, C(n, 1..=7): the slot counts a wide

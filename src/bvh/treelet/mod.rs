@@ -37,7 +37,8 @@ pub use dp_unrolled::TreeletDp;
 pub use rounds::RoundSchedule;
 
 pub use crate::gpu::constants::{
-    MAX_GPU_LEAF_SIZE, MAX_LEVEL_DISPATCHES, MAX_SUBTREE_LEVELS, MAX_TREELET_SIZE, MIN_TREELET_SIZE,
+    MAX_GPU_LEAF_SIZE, MAX_LEVEL_DISPATCHES, MAX_SUBTREE_LEVELS, MAX_TREELET_SIZE,
+    MIN_TREELET_SIZE, SUBTREE_LIST,
 };
 
 use collapse::{Collapse, CollapseBuffers};

@@ -23,9 +23,9 @@
 //! GPUs to compare; the same tree). On request the rounds run overlapped in waves instead
 //! (`RoundSchedule::overlap`, module `waves`), after the first round's schedule here. On request
 //! the lowest K levels of a round take one dispatch (`RoundSchedule::subtree_levels`, kernel
-//! `subtrees_optimize`): the schedule buckets the roots of the disjoint subtrees that hold them
-//! (of level K at most, their parent above) in level 1's slots, and each workgroup optimizes a
-//! few of these subtrees depth by depth between workgroup barriers, where a dispatch per level
+//! `subtrees_optimize`): the schedule buckets only the roots of the disjoint subtrees that hold
+//! them (of level K at most, their parent above), each in its level's bucket, and each workgroup
+//! optimizes a few of these subtrees depth by depth between workgroup barriers, where a dispatch per level
 //! pays its launch and the wait for its slowest treelet (a floor of ~24 µs a level on an H200;
 //! README, "Where a small treelet level's time goes"); the levels above as before.
 
@@ -41,7 +41,7 @@ use super::treelets_climb::TREELETS_CLIMB;
 use super::treelets_optimize::TREELETS_OPTIMIZE;
 use super::waves::{overlap_reach, Overlap};
 use crate::gpu::constants::{
-    MAX_LEVEL_DISPATCHES, MAX_SUBTREE_LEVELS, MAX_TREELET_SIZE, MIN_TREELET_SIZE,
+    MAX_LEVEL_DISPATCHES, MAX_SUBTREE_LEVELS, MAX_TREELET_SIZE, MIN_TREELET_SIZE, SUBTREE_LIST,
 };
 use crate::gpu::{
     storage_buffer, storage_buffer_zeroed, GpuContext, Grid, ItemCount, Kernel, KernelDecl, Pass,
@@ -80,7 +80,10 @@ pub struct RoundParams {
     /// The levels up to this one are optimized per subtree (`RoundSchedule::subtree_levels`;
     /// 0: by level, as the levels above).
     subtree_levels: u32,
-    pad: [u32; 3],
+    /// Cut roots of level l per workgroup of `subtrees_optimize` at most: this >> (l − 1)
+    /// (`RoundSchedule::subtree_width`).
+    subtree_width: u32,
+    pad: [u32; 2],
 }
 const _: () = assert!(std::mem::size_of::<RoundParams>() == 80);
 
@@ -107,7 +110,8 @@ impl RoundParams {
             reach: overlap.reach,
             wave,
             subtree_levels: 0,
-            pad: [0; 3],
+            subtree_width: 0,
+            pad: [0; 2],
         }
     }
 }
@@ -226,6 +230,13 @@ pub struct RoundSchedule {
     /// levels above as without it (at least K levels count as dispatched). None or 0: every
     /// level by level. Not with overlapped rounds (a build refuses both).
     pub subtree_levels: Option<u32>,
+    /// How many subtrees a workgroup takes: at most `subtree_width` >> (l − 1) of level l (and
+    /// as many as its list holds, at most 32). A subtree of level l has up to 2^(l − 1) roots at
+    /// its lowest depth, so 32 keeps a workgroup's steps near its subtrees' depths (latency: on
+    /// a GPU most of the subtrees' lanes idle at the top depths, but the GPU has lanes to
+    /// spare), while `SUBTREE_LIST` fills the list (throughput: fewer idle lanes, each
+    /// workgroup longer). None: `DEFAULT_SUBTREE_WIDTH` of the device type.
+    pub subtree_width: Option<u32>,
 }
 
 impl RoundSchedule {
@@ -258,6 +269,14 @@ impl RoundSchedule {
     /// The levels optimized per subtree (0: none).
     pub fn subtree_levels(&self) -> u32 {
         self.subtree_levels.unwrap_or(0)
+    }
+
+    /// The subtree width in effect on a device of type `device`.
+    pub fn subtree_width(&self, device: wgpu::DeviceType) -> u32 {
+        self.subtree_width.unwrap_or(match device {
+            wgpu::DeviceType::Cpu => SUBTREE_LIST,
+            _ => DEFAULT_SUBTREE_WIDTH,
+        })
     }
 
     /// The team threshold in effect.
@@ -297,6 +316,9 @@ impl RoundSchedule {
         if let Some(levels) = self.subtree_levels {
             parts.push(format!("subtrees={levels}"));
         }
+        if let Some(width) = self.subtree_width {
+            parts.push(format!("subtree-width={width}"));
+        }
         if parts.is_empty() {
             return "default".into();
         }
@@ -317,6 +339,15 @@ impl RoundSchedule {
 /// treelets: trbvh with 16 levels dispatched, conference 4.49 ms never, 7.54 ms below 512,
 /// 8.37 ms below 4096; field:707 5.40, 6.44 and 7.36 ms (`scripts/gpu-schedules.sh`).
 const DEFAULT_TEAM_BELOW: u32 = 0;
+
+/// `RoundSchedule::subtree_width` on GPUs: about two lowest depths of a subtree per invocation.
+/// Counted on the CPU twin's trees (`examples/subtree_schedule.rs`; conference, (7,3), round 1,
+/// K = 6): 1250 workgroups of at most 7 steps (a treelet per invocation each), 7556 warp steps
+/// in all; with 32, 2487 workgroups of at most 6 steps but 14229 warp steps; with the list's
+/// bound, 190 workgroups of up to 32 steps, 2839 warp steps (README, "Subtrees for the lowest
+/// levels"). Not timed on a GPU yet. CPU devices (lavapipe: invocations are SIMD lanes,
+/// throughput-bound) fill the list.
+const DEFAULT_SUBTREE_WIDTH: u32 = 64;
 
 /// Treelet sizes with kernels of their own, MIN_TREELET_SIZE..=MAX_TREELET_SIZE.
 const TREELET_SIZES: usize = (MAX_TREELET_SIZE - MIN_TREELET_SIZE + 1) as usize;
@@ -551,7 +582,8 @@ impl TreeletRounds {
                 Some(_) => 0,
                 None => self.schedule.subtree_levels(),
             },
-            pad: [0; 3],
+            subtree_width: self.schedule.subtree_width(ctx.info.device_type),
+            pad: [0; 2],
         };
         let limit = count.limit(ctx);
         pass.dispatch(
