@@ -19,31 +19,6 @@ use treelet::scene::load_scene;
 /// Invocations of a `subtrees_optimize` workgroup, and of a warp.
 const WARP: usize = 32;
 
-/// Leaves below each node and each node's treelet level for smallest root `gamma` (0 below
-/// gamma leaves, else one more than its children's highest).
-fn levels(tree: &WorkingTree, gamma: u32) -> (Vec<u32>, Vec<u32>) {
-    let count = tree.nodes.len();
-    let (mut leaves, mut levels) = (vec![0u32; count], vec![0u32; count]);
-    let mut stack = vec![(0u32, false)];
-    while let Some((node, expanded)) = stack.pop() {
-        let n = tree.nodes[node as usize];
-        let (l, r) = n.children();
-        if n.is_leaf() {
-            leaves[node as usize] = 1;
-        } else if !expanded {
-            stack.extend([(node, true), (l, false), (r, false)]);
-        } else {
-            let (l, r, i) = (l as usize, r as usize, node as usize);
-            leaves[i] = leaves[l] + leaves[r];
-            if leaves[i] >= gamma {
-                let of = |c: usize| if leaves[c] >= gamma { levels[c] } else { 0 };
-                levels[i] = 1 + of(l).max(of(r));
-            }
-        }
-    }
-    (leaves, levels)
-}
-
 /// `subtrees_per_workgroup` of treelet_round.wgsl.
 fn subtrees_per_workgroup(level: u32, width: u32) -> usize {
     let bound = (SUBTREE_LIST / ((1 << level) - 1)).min(WARP as u32);
@@ -73,7 +48,7 @@ fn main() -> treelet::Result<()> {
         let (lbvh, parents) = build_lbvh_from_boxes_cpu(&boxes, TRBVH_KEY_BITS);
         let mut tree = WorkingTree::from_lbvh(lbvh, parents);
         for (round, &gamma) in settings.gammas().iter().enumerate() {
-            let (leaves, levels) = levels(&tree, gamma);
+            let (leaves, levels) = tree.treelet_levels(gamma);
             let is_root = |node: u32| leaves[node as usize] >= gamma;
             for &k in &heights {
                 let level_warps: usize = (1..=k)

@@ -14,16 +14,7 @@
 // depths leave the roots listed where they were). The levels above K follow as without subtrees
 // (treelets_optimize.wgsl, treelets_climb.wgsl). Node data is only shared within the workgroup:
 // storageBarriers order it.
-#include "bvh_node.wgsl"
-#include "treelet_round.wgsl"
-
-@group(0) @binding(0) var<uniform> params: RoundParams;
-@group(0) @binding(1) var<storage, read_write> nodes: array<BvhNode>;
-@group(0) @binding(2) var<storage, read_write> parents: array<u32>;
-@group(0) @binding(3) var<storage, read_write> prim_counts: array<u32>;
-@group(0) @binding(4) var<storage, read_write> costs: array<f32>;
-@group(0) @binding(5) var<storage, read> schedule: array<u32>;
-@group(0) @binding(6) var<storage, read> roots: array<u32>;
+#include "treelet_roots.wgsl"
 // The next round's level of each node a treelet finishes (treelet_dp.wgsl).
 @group(0) @binding(7) var<storage, read_write> next_levels: array<u32>;
 

@@ -12,19 +12,11 @@
 // TEAMS teams of 32 invocations, a treelet per team at a time (treelet_team.wgsl: the waves near
 // the top hold one to a few treelets); a larger wave one treelet per invocation (treelet_dp.wgsl).
 // Node data is only shared within the workgroup: storageBarriers order it.
-#include "bvh_node.wgsl"
-#include "treelet_round.wgsl"
 
 const WORKGROUP: u32 = 128u;
 const TEAMS: u32 = 4u;
 
-@group(0) @binding(0) var<uniform> params: RoundParams;
-@group(0) @binding(1) var<storage, read_write> nodes: array<BvhNode>;
-@group(0) @binding(2) var<storage, read_write> parents: array<u32>;
-@group(0) @binding(3) var<storage, read_write> prim_counts: array<u32>;
-@group(0) @binding(4) var<storage, read_write> costs: array<f32>;
-@group(0) @binding(5) var<storage, read> schedule: array<u32>;
-@group(0) @binding(6) var<storage, read> roots: array<u32>;
+#include "treelet_roots.wgsl"
 // `treelet::subsets_by_size`.
 @group(0) @binding(7) var<storage, read> subset_order: array<u32>;
 // The next round's level of each node a treelet finishes (treelet_dp.wgsl).

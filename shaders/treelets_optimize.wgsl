@@ -3,19 +3,11 @@
 // params.team_below treelets gives each an invocation (treelet_dp.wgsl), 32 per workgroup; a
 // smaller level gives each a workgroup, whose 32 invocations share its DP (treelet_team.wgsl). The
 // dispatches of the levels below have finished, so node data is read with plain loads.
-#include "bvh_node.wgsl"
-#include "treelet_round.wgsl"
 
 const WORKGROUP: u32 = 32u;
 const TEAMS: u32 = 1u;
 
-@group(0) @binding(0) var<uniform> params: RoundParams;
-@group(0) @binding(1) var<storage, read_write> nodes: array<BvhNode>;
-@group(0) @binding(2) var<storage, read_write> parents: array<u32>;
-@group(0) @binding(3) var<storage, read_write> prim_counts: array<u32>;
-@group(0) @binding(4) var<storage, read_write> costs: array<f32>;
-@group(0) @binding(5) var<storage, read> schedule: array<u32>;
-@group(0) @binding(6) var<storage, read> roots: array<u32>;
+#include "treelet_roots.wgsl"
 // `treelet::subsets_by_size`.
 @group(0) @binding(7) var<storage, read> subset_order: array<u32>;
 // The next round's level of each node a treelet finishes (treelet_dp.wgsl).

@@ -301,38 +301,19 @@ fn bench_round_overlap_reports_each_reach() {
         assert_eq!(record["nodes"], records[0]["nodes"]);
     }
     // Below treelet size − 1 two treelets of a wave could share nodes: refused.
-    let refused = treelet(&[
-        "bench",
-        "--scene",
-        "cornell",
-        "--builder",
-        "trbvh",
-        "--round-overlap",
-        "5",
-    ]);
-    assert!(!refused.status.success());
-    let stderr = String::from_utf8_lossy(&refused.stderr);
-    assert!(
-        stderr.contains("round overlap reach of 5 is below 6, the least for treelets of 7 leaves"),
-        "{stderr}"
+    let bench = ["bench", "--scene", "cornell", "--builder", "trbvh"];
+    assert_clean_failure(
+        &[&bench[..], &["--round-overlap", "5"]].concat(),
+        "round overlap reach of 5 is below 6, the least for treelets of 7 leaves",
     );
     // Overlapped rounds find their own waves: not with subtrees.
-    let refused = treelet(&[
-        "bench",
-        "--scene",
-        "cornell",
-        "--builder",
-        "trbvh",
-        "--round-overlap",
-        "6",
-        "--subtree-levels",
-        "4",
-    ]);
-    assert!(!refused.status.success());
-    let stderr = String::from_utf8_lossy(&refused.stderr);
-    assert!(
-        stderr.contains("either overlap or take subtrees, not both"),
-        "{stderr}"
+    assert_clean_failure(
+        &[
+            &bench[..],
+            &["--round-overlap", "6", "--subtree-levels", "4"],
+        ]
+        .concat(),
+        "either overlap or take subtrees, not both",
     );
 }
 

@@ -58,6 +58,25 @@ impl WorkingTree {
         order
     }
 
+    /// Leaves below each node and each node's treelet level for smallest root `gamma` (0 below
+    /// gamma leaves, else one more than its children's highest: the levels the GPU rounds
+    /// process one by one, `nodes_level.wgsl`), from the topology alone.
+    pub fn treelet_levels(&self, gamma: u32) -> (Vec<u32>, Vec<u32>) {
+        let count = self.nodes.len();
+        let mut leaves: Vec<u32> = self.nodes.iter().map(|n| u32::from(n.is_leaf())).collect();
+        let mut levels = vec![0u32; count];
+        for node in self.post_order() {
+            let (l, r) = self.nodes[node as usize].children();
+            let (l, r, i) = (l as usize, r as usize, node as usize);
+            leaves[i] = leaves[l] + leaves[r];
+            if leaves[i] >= gamma {
+                let of = |c: usize| if leaves[c] >= gamma { levels[c] } else { 0 };
+                levels[i] = 1 + of(l).max(of(r));
+            }
+        }
+        (leaves, levels)
+    }
+
     /// One restructuring round: every node gets its primitive count and cost; nodes with at least
     /// `gamma` primitives root a treelet of up to `treelet_size` leaves that is replaced by its
     /// SAH-optimal topology when that is cheaper.

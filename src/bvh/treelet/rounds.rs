@@ -497,19 +497,12 @@ impl TreeletRounds {
             if level > subtree_levels {
                 pass.dispatch_indirect(optimize, state.schedule, args, &params, &treelet_buffers);
             } else if level == 1 {
-                // The levels up to subtree_levels: one workgroup per cut root (level 1's bucket).
+                // The levels up to subtree_levels: a workgroup per few cut roots (level 1's
+                // arguments count them all); the treelet buffers but the teams' subsets.
                 let subtrees = self
                     .subtrees
                     .get(ctx, round.treelet_size, self.schedule.dp());
-                let subtree_buffers = [
-                    state.nodes,
-                    state.parents,
-                    state.prim_counts,
-                    state.costs,
-                    state.schedule,
-                    roots,
-                    state.next_levels,
-                ];
+                let subtree_buffers = [&treelet_buffers[..6], &[state.next_levels]].concat();
                 pass.dispatch_indirect(subtrees, state.schedule, args, &params, &subtree_buffers);
             }
         }
@@ -621,32 +614,6 @@ mod tests {
     use crate::bvh::SahParams;
     use crate::geometry::Aabb;
 
-    /// Leaves below each node and each node's treelet level for smallest root `gamma` (0 below
-    /// gamma leaves, else one more than its children's highest), from the topology alone.
-    fn levels(tree: &WorkingTree, gamma: u32) -> (Vec<u32>, Vec<u32>) {
-        let count = tree.nodes.len();
-        let (mut leaves, mut levels) = (vec![0u32; count], vec![0u32; count]);
-        let mut stack = vec![(0u32, false)];
-        while let Some((node, expanded)) = stack.pop() {
-            let n = tree.nodes[node as usize];
-            let (l, r) = n.children();
-            if n.is_leaf() {
-                leaves[node as usize] = 1;
-            } else if !expanded {
-                stack.extend([(node, true), (l, false), (r, false)]);
-            } else {
-                let (l, r) = (l as usize, r as usize);
-                let i = node as usize;
-                leaves[i] = leaves[l] + leaves[r];
-                if leaves[i] >= gamma {
-                    let of = |c: usize| if leaves[c] >= gamma { levels[c] } else { 0 };
-                    levels[i] = 1 + of(l).max(of(r));
-                }
-            }
-        }
-        (leaves, levels)
-    }
-
     /// Boxes of `n` triangles: uniform, in two far clusters, or all at one point.
     fn boxes(n: usize, kind: u32, seed: u64) -> Vec<Aabb> {
         let mut rng = Pcg64::seed_from_u64(seed);
@@ -682,7 +649,7 @@ mod tests {
                 };
                 let tree = optimize_lbvh_cpu(lbvh.clone(), &settings, &model);
                 for gamma in [3u32, 5, 7, 14, 28, 56] {
-                    let (leaves, levels) = levels(&tree, gamma);
+                    let (leaves, levels) = tree.treelet_levels(gamma);
                     let top = levels.iter().copied().max().unwrap_or(0);
                     for level in 1..=top {
                         let roots = (0..tree.nodes.len())
