@@ -118,10 +118,10 @@ fn bucket_together(node: u32, bucket: u32, lid: u32) {
 
 // The first round's roots of bucketed levels and its cut roots, queued by the workgroup during its
 // climb (node, bucket, rank in the bucket) and bucketed together after it; a root past the
-// queue's room is bucketed on its own (`bucket_alone`). A workgroup finishes about one node per invocation, plus the
-// climbs above its leaves: a queue of two per invocation holds most of a workgroup's roots (the
-// rest, from the long climbs near the top, take an atomic each; CPU devices' 8-wide workgroups
-// use both paths).
+// queue's room is bucketed on its own (`bucket_alone`). A workgroup finishes about one node per
+// invocation, plus the climbs above its leaves: a queue of two per invocation holds most of a
+// workgroup's roots (the rest, from the long climbs near the top, take an atomic each; CPU
+// devices' 8-wide workgroups use both paths).
 override ROOT_QUEUE: u32 = 2u * WORKGROUP_WIDTH;
 var<workgroup> root_queue: array<vec3<u32>, ROOT_QUEUE>;
 var<workgroup> queued_roots: atomic<u32>;
@@ -173,8 +173,11 @@ fn bucket_internal_node(j: u32, n: u32, lid: u32) {
         if is_root(j) {
             let level = atomicLoad(&levels[j]);
             bucket = level_bucket(level);
-            if level <= params.subtree_levels && (j == 0u || atomicLoad(&levels[parents[j]]) > params.subtree_levels) {
-                bucket = cut_bucket(level);
+            // Only with subtrees: the parent's level is one more dependent load.
+            if level <= params.subtree_levels {
+                if j == 0u || atomicLoad(&levels[parents[j]]) > params.subtree_levels {
+                    bucket = cut_bucket(level);
+                }
             }
         }
     }

@@ -25,9 +25,9 @@
 //! the lowest K levels of a round take one dispatch (`RoundSchedule::subtree_levels`, kernel
 //! `subtrees_optimize`): the schedule buckets only the roots of the disjoint subtrees that hold
 //! them (of level K at most, their parent above), each in its level's bucket, and each workgroup
-//! optimizes a few of these subtrees depth by depth between workgroup barriers, where a dispatch per level
-//! pays its launch and the wait for its slowest treelet (a floor of ~24 µs a level on an H200;
-//! README, "Where a small treelet level's time goes"); the levels above as before.
+//! optimizes a few of these subtrees depth by depth between workgroup barriers, where a dispatch
+//! per level pays its launch and the wait for its slowest treelet (a floor of ~24 µs a level on
+//! an H200; README, "Where a small treelet level's time goes"); the levels above as before.
 
 use std::sync::OnceLock;
 
@@ -224,11 +224,11 @@ pub struct RoundSchedule {
     /// climb takes the rest; teams apply to the climb's waves.
     pub overlap: Option<u32>,
     /// Treelet levels 1 ..= K of each round optimized per subtree (`subtrees_optimize`), K at
-    /// most `MAX_SUBTREE_LEVELS`: one dispatch, a workgroup for each subtree whose root is of
-    /// level K at most and its parent above (it holds at most 2^K − 1 roots), the subtree's
-    /// treelets depth by depth between workgroup barriers instead of a dispatch per level. The
-    /// levels above as without it (at least K levels count as dispatched). None or 0: every
-    /// level by level. Not with overlapped rounds (a build refuses both).
+    /// most `MAX_SUBTREE_LEVELS`: one dispatch, each workgroup taking a few of the subtrees whose
+    /// root is of level K at most and its parent above (one of level l holds at most 2^l − 1
+    /// roots), their treelets depth by depth between workgroup barriers instead of a dispatch
+    /// per level. The levels above as without it (at least K levels count as dispatched). None
+    /// or 0: every level by level. Not with overlapped rounds (a build refuses both).
     pub subtree_levels: Option<u32>,
     /// How many subtrees a workgroup takes: at most `subtree_width` >> (l − 1) of level l (and
     /// as many as its list holds, at most 32). A subtree of level l has up to 2^(l − 1) roots at
@@ -608,11 +608,32 @@ mod tests {
     use rand::{Rng, SeedableRng};
     use rand_pcg::Pcg64;
 
-    use super::level_start;
+    use super::{level_start, RoundSchedule};
     use crate::bvh::lbvh::{build_lbvh_from_boxes_cpu, TRBVH_KEY_BITS};
     use crate::bvh::treelet::{optimize_lbvh_cpu, CostModel, TreeletSettings, WorkingTree};
     use crate::bvh::SahParams;
     use crate::geometry::Aabb;
+    use crate::gpu::constants::MAX_SUBTREE_LEVELS;
+
+    /// A schedule is refused with subtrees of more levels than a workgroup's list holds, and
+    /// with both subtrees and overlapped rounds; each alone is taken.
+    #[test]
+    fn subtrees_beyond_the_list_or_with_overlapped_rounds_are_refused() {
+        let with = |subtree_levels: u32, overlap: Option<u32>| {
+            RoundSchedule {
+                subtree_levels: Some(subtree_levels),
+                overlap,
+                ..RoundSchedule::default()
+            }
+            .check(7)
+        };
+        assert!(with(MAX_SUBTREE_LEVELS, None).is_ok());
+        assert!(with(0, Some(6)).is_ok());
+        let beyond = with(MAX_SUBTREE_LEVELS + 1, None).unwrap_err().to_string();
+        assert!(beyond.contains("exceed the most"), "{beyond}");
+        let both = with(4, Some(6)).unwrap_err().to_string();
+        assert!(both.contains("not both"), "{both}");
+    }
 
     /// Boxes of `n` triangles: uniform, in two far clusters, or all at one point.
     fn boxes(n: usize, kind: u32, seed: u64) -> Vec<Aabb> {
