@@ -688,9 +688,8 @@ mod tests {
     };
 
     /// A build time with one best value per dimension: overlap 6 (else subtrees of 6 levels, of
-    /// width 128),
-    /// the loop DP in the climb, teams below 16, 11 dispatched levels, tiles of 16 keys per
-    /// invocation, 14 wide levels dispatched.
+    /// width 128), the loop DP in the climb, teams below 16, 11 dispatched levels, tiles of 16
+    /// keys per invocation, 14 wide levels dispatched.
     fn cost(b: BuildSchedule) -> f64 {
         let s = b.rounds;
         let mut ms = 10.0;

@@ -79,8 +79,8 @@ pub struct BenchArgs {
     /// default: one round after another); trbvh, trbvh-split; a comma-separated list to compare
     #[arg(long, value_delimiter = ',')]
     round_overlap: Vec<Reach>,
-    /// Treelet levels per round optimized per subtree, 0-8: one dispatch, a workgroup per
-    /// subtree holding them, instead of a dispatch per level (default: 0, none; not with
+    /// Treelet levels per round optimized per subtree, 0-8: one dispatch, a workgroup per few
+    /// subtrees holding them, instead of a dispatch per level (default: 0, none; not with
     /// --round-overlap); trbvh, trbvh-split; a comma-separated list to compare. The tree is the
     /// same for every value
     #[arg(long, value_delimiter = ',',

@@ -570,11 +570,9 @@ impl TreeletRounds {
             rounds: 0,
             reach: 0,
             wave: 0,
-            // The overlapped rounds take level 1's roots as the first wave (no subtrees).
-            subtree_levels: match self.schedule.overlap {
-                Some(_) => 0,
-                None => self.schedule.subtree_levels(),
-            },
+            // 0 with overlapped rounds, which take level 1's roots as their first wave (`check`
+            // refuses both).
+            subtree_levels: self.schedule.subtree_levels(),
             subtree_width: self.schedule.subtree_width(ctx.info.device_type),
             pad: [0; 2],
         };
