@@ -35,7 +35,7 @@ save() { tar -C $res -czf "$final/results.tar.gz" .; }
 step() {
   local name=$1 cap=$2 left
   shift 2
-  case " ${STEPS:-tests subtrees layouts scaling schedules variants widelevels probe profile kernels} " in
+  case " ${STEPS:-tests subtrees indirect layouts scaling schedules variants widelevels probe profile kernels} " in
     *" $name "*) ;;
     *) return ;;
   esac
@@ -96,7 +96,7 @@ wide_levels() {
 }
 export -f wide_levels
 # The rounds' lowest levels per subtree (`--subtree-levels`: one dispatch for K levels, a
-# workgroup per few subtrees) at each height beside by level (0), the default subtree width (64)
+# workgroup per few subtrees) at each height beside by level (0), the default subtree width (128)
 # and the levels above dispatched by default; then at 6 with other widths (latency against
 # throughput: examples/subtree_schedule.rs counts both), and at 8 with fewer levels above
 # dispatched (the rest climbed). The same tree each time.
@@ -113,6 +113,21 @@ subtrees() {
     $small >> $res/subtrees.jsonl
 }
 export -f subtrees
+# wgpu's validation of indirect dispatch arguments (a dispatch of its own before each indirect
+# one; `gpu::instance_flags` turns it off unless WGPU_VALIDATION_INDIRECT_CALL=1): each build
+# with it on, then off, in turn, on the binary layout and the wide one.
+indirect() {
+  for s in conference sibenik crytek_sponza field:707 field:2000; do
+    for turn in 1 2; do
+      for v in 1 0; do
+        WGPU_VALIDATION_INDIRECT_CALL=$v timeout 40 $TREELET bench --scene $s --builder lbvh,trbvh,trbvh-split \
+          --layout binary,wide --tune-schedule off $small | sed "s/^{/{\"indirect_validation\":$v,\"turn\":$turn,/" \
+          >> $res/indirect.jsonl
+      done
+    done
+  done
+}
+export -f indirect
 export small base work
 tests() {
   # shellcheck disable=SC2016
@@ -122,6 +137,7 @@ tests() {
 export -f tests
 step tests 150 bash -c tests
 step subtrees 120 bash -c subtrees
+step indirect 150 bash -c indirect
 # The trace first: both layouts on every scene (their ray counts must agree), then the variants.
 step layouts 80 env SCENES="conference crytek_sponza sibenik lost_empire armadillo" OPTIMAL_SCENES="conference lost_empire" \
   REPEATS=11 bash scripts/gpu-layouts.sh
@@ -170,6 +186,13 @@ for r in rows("subtrees.jsonl"):
           f" {r.get('subtree_width')!s:>4} {r.get('level_dispatches')!s:>4} {b.get('min', 0):7.2f} {r['build_ms']:7.2f} {b.get('max', 0):7.2f}"
           f" {st.get('treelets') or 0:7.3f} {st.get('treelets climb') or 0:6.3f} {r['dispatches']:4}"
           f" {r.get('sah') or 0:.4f}")
+print("indirect.jsonl: scene, builder, layout, indirect validation, turn, build ms (min/median/max), wide ms,"
+      " dispatches, SAH")
+for r in rows("indirect.jsonl"):
+    b = r.get("build_ms_spread") or {}
+    print(f"  {os.path.basename(r['scene'])[:14]:14} {r['builder']:11} {r.get('layout')!s:6} {r['indirect_validation']}"
+          f" {r['turn']} {b.get('min', 0):7.2f} {r['build_ms']:7.2f} {b.get('max', 0):7.2f}"
+          f" {(r.get('stages_ms') or {}).get('wide') or 0:6.3f} {r['dispatches']:4} {r.get('sah') or 0:.4f}")
 print("widelevels.jsonl: scene, wide levels, level dispatches asked, wide stage ms, build ms")
 for r in rows("widelevels.jsonl"):
     print(f"  {os.path.basename(r['scene'])[:14]:14} {r.get('wide_levels') or 0:3} {r.get('wide_level_dispatches')!s:>4}"

@@ -4,6 +4,7 @@
 mod common;
 
 use common::{assert_clean_failure, run_treelet as treelet};
+use treelet::bvh::treelet::RoundSchedule;
 
 #[test]
 fn missing_scene_file_is_a_clear_error() {
@@ -268,12 +269,22 @@ fn bench_subtree_levels_reports_each_height() {
         .map(|r| r["subtree_levels"].as_u64())
         .collect();
     assert_eq!(heights, [Some(0), Some(4), Some(8)]);
-    // The width in effect with subtrees: a CPU device's (the list filled).
+    // The width in effect with subtrees: the default of the device type the bench reports (a
+    // CPU device fills the list, a GPU takes fewer subtrees per workgroup).
+    let device = match records[0]["device_type"].as_str() {
+        Some("Cpu") => wgpu::DeviceType::Cpu,
+        Some("DiscreteGpu") => wgpu::DeviceType::DiscreteGpu,
+        Some("IntegratedGpu") => wgpu::DeviceType::IntegratedGpu,
+        Some("VirtualGpu") => wgpu::DeviceType::VirtualGpu,
+        Some("Other") => wgpu::DeviceType::Other,
+        other => panic!("unexpected device type {other:?}"),
+    };
+    let width = u64::from(RoundSchedule::default().subtree_width(device));
     let widths: Vec<_> = records
         .iter()
         .map(|r| r["subtree_width"].as_u64())
         .collect();
-    assert_eq!(widths, [None, Some(1024), Some(1024)]);
+    assert_eq!(widths, [None, Some(width), Some(width)]);
     for record in &records {
         assert_eq!(record["valid"], true);
         assert_eq!(record["sah"], records[0]["sah"]);

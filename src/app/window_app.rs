@@ -16,7 +16,7 @@ use super::options::ViewerOptions;
 use super::screenshot::{timestamped_path, Capture};
 use super::surface::WindowSurface;
 use super::viewer::Viewer;
-use crate::gpu::GpuContext;
+use crate::gpu::{instance_flags, GpuContext};
 use crate::trace::save_png;
 use crate::{Error, Result};
 
@@ -33,9 +33,11 @@ pub fn run(options: ViewerOptions) -> Result<()> {
     let event_loop = EventLoop::new()
         .map_err(|e| Error::Gpu(format!("cannot connect to a display for the viewer: {e}")))?;
     event_loop.set_control_flow(ControlFlow::Poll);
-    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(
-        Box::new(event_loop.owned_display_handle()),
+    let mut descriptor = wgpu::InstanceDescriptor::new_with_display_handle_from_env(Box::new(
+        event_loop.owned_display_handle(),
     ));
+    descriptor.flags = instance_flags();
+    let instance = wgpu::Instance::new(descriptor);
     let mut app = App {
         options,
         instance: Some(instance),

@@ -88,7 +88,7 @@ pub struct BenchArgs {
     subtree_levels: Vec<u32>,
     /// With --subtree-levels: how many subtrees a workgroup takes, at most this >> (l − 1) of
     /// level l (and as many as its list of 1024 roots holds, at most 32): 32 keeps a workgroup's
-    /// steps near its subtrees' depths (latency), 1024 fills the list (throughput; default: 64
+    /// steps near its subtrees' depths (latency), 1024 fills the list (throughput; default: 128
     /// on GPUs, 1024 on CPU devices); a comma-separated list to compare. The tree is the same for
     /// every value
     #[arg(long, value_delimiter = ',',

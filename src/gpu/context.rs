@@ -61,12 +61,26 @@ fn type_rank(t: wgpu::DeviceType) -> u32 {
     }
 }
 
+/// The flags of every wgpu instance treelet opens: wgpu's for the build type and its environment
+/// variables (`WGPU_VALIDATION`, ...), but without wgpu's validation of indirect dispatch
+/// arguments unless `WGPU_VALIDATION_INDIRECT_CALL=1` asks for it. That validation runs a
+/// dispatch of its own before each indirect dispatch, between two barriers, and rebinds the pass's
+/// pipeline and bind groups, while every indirect argument of the crate comes from its own kernels
+/// within the limit it guards (at most 65535 workgroups per dimension: `nodes_level.wgsl` and
+/// `treelet_waves.wgsl` spread a larger count over y, `wide_nodes_emit.wgsl` caps x and strides).
+/// A treelet build dispatches each level indirectly, so it would otherwise run twice as many
+/// dispatches there.
+pub fn instance_flags() -> wgpu::InstanceFlags {
+    (wgpu::InstanceFlags::from_build_config() - wgpu::InstanceFlags::VALIDATION_INDIRECT_CALL)
+        .with_env()
+}
+
 impl GpuContext {
     /// Opens a device without a window (headless rendering, benchmarks, tests).
     pub fn new(options: &GpuOptions) -> Result<Self> {
-        let instance =
-            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-        Self::with_instance(instance, options, None)
+        let mut descriptor = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+        descriptor.flags = instance_flags();
+        Self::with_instance(wgpu::Instance::new(descriptor), options, None)
     }
 
     /// Opens a device on `instance`, able to present to `surface` when given.

@@ -22,7 +22,7 @@ pub use buffers::{
     bind_entry, indirect_buffer_zeroed, read_buffer, storage_buffer, storage_buffer_zeroed,
     uniform_buffer,
 };
-pub use context::{GpuContext, GpuOptions};
+pub use context::{instance_flags, GpuContext, GpuOptions};
 pub use item_count::ItemCount;
 pub use kernel::{
     check_climb_width, default_climb_width, Grid, Items, Kernel, KernelDecl, KernelInfo, Overrides,

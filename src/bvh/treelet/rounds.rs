@@ -340,14 +340,15 @@ impl RoundSchedule {
 /// 8.37 ms below 4096; field:707 5.40, 6.44 and 7.36 ms (`scripts/gpu-schedules.sh`).
 const DEFAULT_TEAM_BELOW: u32 = 0;
 
-/// `RoundSchedule::subtree_width` on GPUs: about two lowest depths of a subtree per invocation.
-/// Counted on the CPU twin's trees (`examples/subtree_schedule.rs`; conference, (7,3), round 1,
-/// K = 6): 1250 workgroups of at most 7 steps (a treelet per invocation each), 7556 warp steps
-/// in all; with 32, 2487 workgroups of at most 6 steps but 14229 warp steps; with the list's
-/// bound, 190 workgroups of up to 32 steps, 2839 warp steps (README, "Subtrees for the lowest
-/// levels"). Not timed on a GPU yet. CPU devices (lavapipe: invocations are SIMD lanes,
-/// throughput-bound) fill the list.
-const DEFAULT_SUBTREE_WIDTH: u32 = 64;
+/// `RoundSchedule::subtree_width` on GPUs: the fastest of the widths timed on an NVIDIA H200
+/// on the shared scenes (K = 6, build ms for W = 32 / 64 / 128 / 1024: conference 5.74 / 4.88 /
+/// 4.49 / 5.18, sibenik 3.21 / 2.83 / 2.65 / 2.96, crytek_sponza 5.76 / 4.70 / 4.15 / 4.41;
+/// field:707 and field:2000 are fastest with the list filled, 5.38 and 23.42 ms; README,
+/// "Subtrees for the lowest levels"). Counted on the CPU twin's trees
+/// (`examples/subtree_schedule.rs`), narrower workgroups trade warp steps for fewer dependent
+/// steps per workgroup. CPU devices (lavapipe: invocations are SIMD lanes, throughput-bound)
+/// fill the list.
+const DEFAULT_SUBTREE_WIDTH: u32 = 128;
 
 /// Treelet sizes with kernels of their own, MIN_TREELET_SIZE..=MAX_TREELET_SIZE.
 const TREELET_SIZES: usize = (MAX_TREELET_SIZE - MIN_TREELET_SIZE + 1) as usize;
