@@ -115,10 +115,10 @@ subtrees() {
 export -f subtrees
 # wgpu's validation of indirect dispatch arguments (a dispatch of its own before each indirect
 # one; `gpu::instance_flags` turns it off unless WGPU_VALIDATION_INDIRECT_CALL=1): each build
-# with it on, then off, in turn, on the binary layout and the wide one.
+# with it on, then off, in turn (TURNS times, default 2), on the binary layout and the wide one.
 indirect() {
-  for s in conference sibenik crytek_sponza field:707 field:2000; do
-    for turn in 1 2; do
+  for s in ${INDIRECT_SCENES:-conference sibenik crytek_sponza field:707 field:2000}; do
+    for turn in $(seq 1 "${TURNS:-2}"); do
       for v in 1 0; do
         WGPU_VALIDATION_INDIRECT_CALL=$v timeout 40 $TREELET bench --scene $s --builder lbvh,trbvh,trbvh-split \
           --layout binary,wide --tune-schedule off $small | sed "s/^{/{\"indirect_validation\":$v,\"turn\":$turn,/" \
