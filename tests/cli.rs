@@ -258,6 +258,20 @@ fn bench_compares_dp_forms_on_the_same_tree() {
     }
 }
 
+/// The subtree width in effect by default on the device a bench record names (a CPU device fills
+/// the list, a GPU takes fewer subtrees per workgroup).
+fn default_subtree_width(record: &serde_json::Value) -> u64 {
+    let device = match record["device_type"].as_str() {
+        Some("Cpu") => wgpu::DeviceType::Cpu,
+        Some("DiscreteGpu") => wgpu::DeviceType::DiscreteGpu,
+        Some("IntegratedGpu") => wgpu::DeviceType::IntegratedGpu,
+        Some("VirtualGpu") => wgpu::DeviceType::VirtualGpu,
+        Some("Other") => wgpu::DeviceType::Other,
+        other => panic!("unexpected device type {other:?}"),
+    };
+    u64::from(RoundSchedule::default().subtree_width(device))
+}
+
 /// `bench --subtree-levels 0,4,8` measures trbvh with each round's lowest levels by level and
 /// per subtree of 4 and 8 levels, reports the height and the width in effect, and builds the
 /// same tree with each.
@@ -269,17 +283,8 @@ fn bench_subtree_levels_reports_each_height() {
         .map(|r| r["subtree_levels"].as_u64())
         .collect();
     assert_eq!(heights, [Some(0), Some(4), Some(8)]);
-    // The width in effect with subtrees: the default of the device type the bench reports (a
-    // CPU device fills the list, a GPU takes fewer subtrees per workgroup).
-    let device = match records[0]["device_type"].as_str() {
-        Some("Cpu") => wgpu::DeviceType::Cpu,
-        Some("DiscreteGpu") => wgpu::DeviceType::DiscreteGpu,
-        Some("IntegratedGpu") => wgpu::DeviceType::IntegratedGpu,
-        Some("VirtualGpu") => wgpu::DeviceType::VirtualGpu,
-        Some("Other") => wgpu::DeviceType::Other,
-        other => panic!("unexpected device type {other:?}"),
-    };
-    let width = u64::from(RoundSchedule::default().subtree_width(device));
+    // The width in effect with subtrees: the device type's default.
+    let width = default_subtree_width(&records[0]);
     let widths: Vec<_> = records
         .iter()
         .map(|r| r["subtree_width"].as_u64())
@@ -392,8 +397,9 @@ fn bench_tunes_the_schedule_on_request() {
             let subtrees = value("subtrees=").map_or(0, |k| k.parse().unwrap());
             assert_eq!(record["subtree_levels"], subtrees, "{kept} {record}");
             if subtrees > 0 {
-                // The CPU device's width unless another was kept.
-                let width = value("subtree-width=").map_or(1024, |w| w.parse().unwrap());
+                // The device type's width unless another was kept.
+                let width = value("subtree-width=")
+                    .map_or(default_subtree_width(record), |w| w.parse().unwrap());
                 assert_eq!(record["subtree_width"], width, "{kept} {record}");
             }
         }
