@@ -27,7 +27,10 @@ build)
   rm -f .gpu/variant-*.xz
   restore() { git checkout -- shaders src; }
   trap restore EXIT
-  for patch in scripts/variants/*.patch; do
+  shopt -s nullglob
+  patches=(scripts/variants/*.patch)
+  [ ${#patches[@]} -gt 0 ] || echo "no scripts/variants/*.patch: no variant to build"
+  for patch in "${patches[@]}"; do
     name=$(basename "$patch" .patch)
     if ! git apply --check "$patch" 2>/dev/null; then
       echo "variant $name: the patch no longer applies to this commit; skipped"
@@ -49,7 +52,7 @@ run)
   : > "$out/variants.jsonl"
   ls .gpu/variant-*.xz > /dev/null 2>&1 || { echo "no .gpu/variant-*.xz: run 'bash scripts/gpu-variants.sh build' first"; exit 1; }
   # The variants whose answer decides the most first (a capped run keeps those), then any others.
-  first="${ORDER:-mark-frontier}"
+  first="${ORDER:-}"
   names=$( (for n in $first; do [ -f ".gpu/variant-$n.xz" ] && echo "$n"; done
     for f in .gpu/variant-*.xz; do n=$(basename "$f" .xz); echo "${n#variant-}"; done) | awk '!seen[$0]++')
   for name in $names; do

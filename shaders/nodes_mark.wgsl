@@ -14,9 +14,12 @@
 //   max_leaf_size primitives: its output leaf is the highest collapsing node on the way (or the
 //   leaf itself), its position the primitives of the left subtrees it climbed out of
 //   (depth-first order, left first);
-// - with them, an output leaf counts each triangle once: its invocation walks its subtree
-//   depth-first, maps the references to triangle ids and gives each its slot, the first
-//   occurrence of a triangle the next position, a repeat none (NO_SLOT).
+// - with them, an output leaf counts each triangle once: its invocation finds its subtree's
+//   working leaves in depth-first order, maps the references to triangle ids and gives each its
+//   slot, the first occurrence of a triangle the next position, a repeat none (NO_SLOT). A leaf of
+//   up to FRONTIER references does it in registers, a level of its subtree at a time (the nodes
+//   of a level loaded at once, so a GPU waits for one load per level, not one per node and three
+//   per reference); a larger one walks its subtree with a stack.
 #include "bvh_node.wgsl"
 #include "unfused.wgsl"
 
@@ -55,6 +58,80 @@ struct CollapseParams {
 
 // The stack holds disjoint subtrees of the output leaf's, each of at least one reference.
 const GATHER_STACK: u32 = MAX_GPU_LEAF_SIZE;
+// Output leaves of at most this many references are gathered in registers (`gather_frontier`).
+const FRONTIER: u32 = 8u;
+
+// Entry k (< 8) of a frontier held as two vec4.
+fn entry(low: vec4<u32>, high: vec4<u32>, k: u32) -> u32 {
+    return select(low, high, k >= 4u)[k & 3u];
+}
+
+// With references, an output leaf of at most FRONTIER of them (`gather_references`' result):
+// its subtree's frontier, left to right, starts at the root; each step replaces every internal
+// node of it by its two children (shifting what follows), until only working leaves are left.
+// Working leaves keep their LBVH places, leaf j at n - 1 + j (the rounds reuse internal nodes
+// only), so the frontier's leaves need no load. No array is indexed by a computed value.
+fn gather_frontier(root: u32, n: u32) -> u32 {
+    let first_leaf = n - 1u;
+    let lanes = vec4<u32>(0u, 1u, 2u, 3u);
+    var low = vec4<u32>(root, 0u, 0u, 0u);
+    var high = vec4<u32>(0u);
+    var count = 1u;
+    loop {
+        // The internal nodes' children, all loaded before any is placed.
+        var lefts = array<u32, FRONTIER>();
+        var rights = array<u32, FRONTIER>();
+        var opened = 0u;
+        for (var k = 0u; k < FRONTIER; k++) {
+            let node = entry(low, high, k);
+            if k < count && node < first_leaf {
+                let children = nodes[node];
+                lefts[k] = children.left_or_first;
+                rights[k] = children.right_or_count;
+                opened |= 1u << k;
+            }
+        }
+        if opened == 0u {
+            break;
+        }
+        var new_low = vec4<u32>(0u);
+        var new_high = vec4<u32>(0u);
+        var at = 0u;
+        for (var k = 0u; k < FRONTIER; k++) {
+            let split = (opened & (1u << k)) != 0u;
+            let first = select(entry(low, high, k), lefts[k], split);
+            new_low = select(new_low, vec4<u32>(first), lanes == vec4<u32>(at));
+            new_high = select(new_high, vec4<u32>(first), lanes + 4u == vec4<u32>(at));
+            // The right child's place; past the frontier (no lane) for a node not opened.
+            let second = select(FRONTIER, at + 1u, split);
+            new_low = select(new_low, vec4<u32>(rights[k]), lanes == vec4<u32>(second));
+            new_high = select(new_high, vec4<u32>(rights[k]), lanes + 4u == vec4<u32>(second));
+            at += select(0u, select(1u, 2u, split), k < count);
+        }
+        low = new_low;
+        high = new_high;
+        count = at;
+    }
+    // The references' triangles, all loaded at once, then each the first of its triangle or not.
+    var triangles = array<u32, FRONTIER>();
+    for (var k = 0u; k < FRONTIER; k++) {
+        if k < count {
+            triangles[k] = ref_tris[prim_indices[entry(low, high, k) - first_leaf]];
+        }
+    }
+    var slot = 0u;
+    for (var k = 0u; k < FRONTIER; k++) {
+        if k < count {
+            var fresh = true;
+            for (var j = 0u; j < k; j++) {
+                fresh = fresh && triangles[j] != triangles[k];
+            }
+            leaf_slots[entry(low, high, k) - first_leaf] = vec2<u32>(root, select(NO_SLOT, slot, fresh));
+            slot += select(0u, 1u, fresh);
+        }
+    }
+    return slot;
+}
 
 // With references: the triangles under output leaf `root` depth-first (left first), each once;
 // stores each working leaf's slot and returns the number of triangles. Working leaves hold one
@@ -157,7 +234,12 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if leaf {
         // Not a select: WGSL evaluates both of its arguments, and the gather walks the subtree.
         if params.has_refs != 0u {
-            prims = gather_references(i, min(params.leaf_count, count_limit[0]) - 1u);
+            let n = min(params.leaf_count, count_limit[0]);
+            if prim_counts[i] <= FRONTIER {
+                prims = gather_frontier(i, n);
+            } else {
+                prims = gather_references(i, n - 1u);
+            }
         } else {
             prims = prim_counts[i];
         }
