@@ -2,7 +2,8 @@
 # Everything a lent GPU is asked to measure, in one `device` call that fits a short lease, step by
 # step in this order (the trace's correctness and the build's figures first): the test binaries
 # ("tests"), the treelet rounds' lowest levels per subtree at each height beside by level
-# ("subtrees"), the binary-vs-wide table ("layouts"), build scaling with each GPU builder's schedule
+# ("subtrees"), every build with wgpu's indirect validation on and off ("indirect"), the
+# binary-vs-wide table ("layouts"), build scaling with each GPU builder's schedule
 # tuned ("scaling"), the round schedules each fixed beside the default and the tuned one (the
 # DP's forms in the dispatched levels and the climb, the overlapped rounds, the team threshold
 # TEAMS, and levels dispatched where LEVELS is set: "schedules"), the changes of scripts/variants/
