@@ -19,7 +19,7 @@ use treelet::bvh::treelet::{TrbvhBuilder, TreeletSettings};
 use treelet::bvh::{sah_cost, validate, SahParams};
 use treelet::device::{Geometry, Tree};
 use treelet::geometry::Ray;
-use treelet::gpu::{GpuContext, ParamSlab, Recorder};
+use treelet::gpu::{instance_flags, GpuContext, ParamSlab, Recorder};
 use treelet::scene::{Material, Triangle};
 use treelet::trace::{brute_force_closest_hit, closest_hits};
 use wgpu::util::DeviceExt;
@@ -69,9 +69,12 @@ fn rays(count_per_side: u32) -> Vec<Ray> {
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    // The caller's device and buffer.
-    let instance =
-        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+    // The caller's device and buffer; the instance without wgpu's validation of indirect
+    // dispatch arguments (`instance_flags`), which would add a dispatch to each of the builder's
+    // indirect ones.
+    let mut descriptor = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+    descriptor.flags = instance_flags();
+    let instance = wgpu::Instance::new(descriptor);
     let adapter = pollster::block_on(instance.request_adapter(&Default::default()))?;
     let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
         label: Some("my renderer"),

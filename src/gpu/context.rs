@@ -270,3 +270,26 @@ impl GpuContext {
         self.device.limits().max_storage_buffer_binding_size
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::instance_flags;
+
+    /// wgpu's indirect validation is off unless its environment variable asks for it (set to
+    /// anything but "0"); wgpu's other flags for the build type are kept.
+    #[test]
+    fn indirect_validation_only_on_request() {
+        let asked = std::env::var("WGPU_VALIDATION_INDIRECT_CALL").is_ok_and(|v| v != "0");
+        let flags = instance_flags();
+        assert_eq!(
+            flags.contains(wgpu::InstanceFlags::VALIDATION_INDIRECT_CALL),
+            asked
+        );
+        let others = wgpu::InstanceFlags::from_build_config().with_env()
+            - wgpu::InstanceFlags::VALIDATION_INDIRECT_CALL;
+        assert_eq!(
+            flags - wgpu::InstanceFlags::VALIDATION_INDIRECT_CALL,
+            others
+        );
+    }
+}
