@@ -7,8 +7,9 @@
 // (a root's child roots one depth below it: at most 2^l - 1 roots per subtree, as a root of level
 // l has at most two child roots, each of a lower level, and at most l depths) and optimizes them a
 // depth at a time, the deepest first, one treelet per invocation (treelet_dp.wgsl), with a
-// workgroup barrier between depths where the levels take a dispatch each. A root is optimized after every root below it and no two roots of one depth share a node
-// (neither is below the other), so the tree is the one of the paper's bottom-up order (the CPU
+// workgroup barrier between depths where the levels take a dispatch each. A root is optimized
+// after every root below it and no two roots of one depth share a node (neither is below the
+// other), so the tree is the one of the paper's bottom-up order (the CPU
 // twin `WorkingTree::optimize_round`; a treelet changes no node above its root, so the deeper
 // depths leave the roots listed where they were). The levels above K follow as without subtrees
 // (treelets_optimize.wgsl, treelets_climb.wgsl). Node data is only shared within the workgroup:
