@@ -187,31 +187,43 @@ fn bench_prints_json_lines() {
     );
 }
 
-/// `bench --level-dispatches ... --team-below ...` measures trbvh once per combination (lbvh once)
-/// and reports each schedule; every schedule builds the same tree.
+/// `bench --level-dispatches ... --team-below ... --climb-team-below ...` measures trbvh once per
+/// combination (lbvh once) and reports each schedule; every schedule builds the same tree.
 #[test]
 fn bench_compares_round_schedules_on_the_same_tree() {
     let records = quick_bench(
         "lbvh,trbvh",
-        &["--level-dispatches", "0,3", "--team-below", "0,4096"],
+        &[
+            "--level-dispatches",
+            "0,3",
+            "--team-below",
+            "0,4096",
+            "--climb-team-below",
+            "0,16",
+        ],
     );
     let schedule = |r: &serde_json::Value| {
         (
             r["builder"].as_str().unwrap().to_owned(),
             r["level_dispatches"].as_u64(),
             r["team_below"].as_u64(),
+            r["climb_team_below"].as_u64(),
         )
     };
     let runs: Vec<_> = records.iter().map(schedule).collect();
-    let trbvh = |d, t| ("trbvh".to_owned(), Some(d), Some(t));
+    let trbvh = |d, t, c| ("trbvh".to_owned(), Some(d), Some(t), Some(c));
     assert_eq!(
         runs,
         [
-            ("lbvh".to_owned(), None, None),
-            trbvh(0, 0),
-            trbvh(0, 4096),
-            trbvh(3, 0),
-            trbvh(3, 4096),
+            ("lbvh".to_owned(), None, None, None),
+            trbvh(0, 0, 0),
+            trbvh(0, 0, 16),
+            trbvh(0, 4096, 0),
+            trbvh(0, 4096, 16),
+            trbvh(3, 0, 0),
+            trbvh(3, 0, 16),
+            trbvh(3, 4096, 0),
+            trbvh(3, 4096, 16),
         ]
     );
     for record in &records[2..] {
@@ -387,6 +399,8 @@ fn bench_tunes_the_schedule_on_request() {
         if treelets {
             let team_below = value("t=").map_or(0, |t| t.parse().unwrap());
             assert_eq!(record["team_below"], team_below, "{kept} {record}");
+            // The climb's teams are not tuned.
+            assert_eq!(record["climb_team_below"], 0, "{kept} {record}");
             let dp = if parts.contains(&"dp=loop") {
                 "loop"
             } else {
@@ -681,7 +695,7 @@ fn overflowing_triangles_are_reported_as_such() {
 
 #[test]
 fn options_of_other_builders_are_refused() {
-    let cases: [(&[&str], &str); 12] = [
+    let cases: [(&[&str], &str); 13] = [
         (
             &["render", "--builder", "sweep", "--treelet-size", "99"],
             "--treelet-size does not apply to builder sweep",
@@ -697,6 +711,10 @@ fn options_of_other_builders_are_refused() {
         (
             &["bench", "--builder", "lbvh", "--team-below", "64"],
             "--team-below does not apply to builder lbvh: only trbvh and trbvh-split have treelets",
+        ),
+        (
+            &["bench", "--builder", "sbvh", "--climb-team-below", "8"],
+            "--climb-team-below does not apply to builder sbvh",
         ),
         (
             &["bench", "--builder", "lbvh", "--treelet-dp", "loop"],

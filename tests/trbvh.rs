@@ -544,20 +544,23 @@ fn teams_lone_invocations_and_dp_forms_build_the_same_tree() {
         };
         builder.settings = settings;
         for levels in [None, Some(0)] {
-            // (team threshold, DP form of the dispatched levels, of the climb). The loop form
-            // with the default schedule only (it dispatches the low levels and climbs the top
-            // ones): on lavapipe, climbing every level with it takes minutes.
+            // (team threshold of the dispatched levels, of the climb, DP form of the dispatched
+            // levels, of the climb). The loop form with the default schedule only (it dispatches
+            // the low levels and climbs the top ones): on lavapipe, climbing every level with it
+            // takes minutes.
             let unrolled = TreeletDp::Unrolled;
-            let mut variants = vec![(0, unrolled, unrolled), (u32::MAX, unrolled, unrolled)];
+            let teams = (u32::MAX, u32::MAX, unrolled, unrolled);
+            let mut variants = vec![(0, 0, unrolled, unrolled), teams];
             if levels.is_none() {
-                variants.push((0, TreeletDp::Loop, TreeletDp::Loop));
-                variants.push((0, unrolled, TreeletDp::Loop));
+                variants.push((0, 0, TreeletDp::Loop, TreeletDp::Loop));
+                variants.push((0, 0, unrolled, TreeletDp::Loop));
             }
             let mut trees = Vec::new();
-            for &(below, dp, climb_dp) in &variants {
+            for &(below, climb_below, dp, climb_dp) in &variants {
                 builder.set_schedule(RoundSchedule {
                     level_dispatches: levels,
                     team_below: Some(below),
+                    climb_team_below: Some(climb_below),
                     dp: Some(dp),
                     climb_dp: Some(climb_dp),
                     ..RoundSchedule::default()
@@ -567,8 +570,9 @@ fn teams_lone_invocations_and_dp_forms_build_the_same_tree() {
             for (tree, variant) in trees.iter().zip(&variants).skip(1) {
                 assert!(
                     tree.working == trees[0].working,
-                    "treelet size {treelet_size}, level dispatches {levels:?}: (teams below, DP, \
-                     climb DP) {variant:?} differ from lone invocations, DP written out"
+                    "treelet size {treelet_size}, level dispatches {levels:?}: (teams below, \
+                     climb teams below, DP, climb DP) {variant:?} differ from lone invocations, \
+                     DP written out"
                 );
             }
             let model = CostModel::from(&builder.sah);
@@ -722,7 +726,7 @@ fn overlapped_rounds_on_the_gpu_equal_the_cpu_twin() {
         let geometry = Geometry::upload(gpu(), &scene).unwrap();
         builder.set_schedule(RoundSchedule::default());
         let sequential = builder.build_stages(gpu(), &geometry).unwrap();
-        // (level dispatches, team threshold): the climb's waves by teams where they are few.
+        // (level dispatches, the climb's team threshold): its waves by teams where they are few.
         let schedules = [
             (None, None),
             (Some(0), None),
@@ -732,17 +736,17 @@ fn overlapped_rounds_on_the_gpu_equal_the_cpu_twin() {
         ];
         // The least reach for the treelet size: 6 for 7 leaves, 7 for the high preset's 8.
         let reach = overlap_reach(settings.treelet_size);
-        for (levels, team_below) in schedules {
+        for (levels, climb_team_below) in schedules {
             builder.set_schedule(RoundSchedule {
                 level_dispatches: levels,
-                team_below,
+                climb_team_below,
                 overlap: Some(reach),
                 ..RoundSchedule::default()
             });
             let stages = builder.build_stages(gpu(), &geometry).unwrap();
             let what = format!(
-                "{} triangles, {settings:?}, level dispatches {levels:?}, teams below \
-                 {team_below:?}",
+                "{} triangles, {settings:?}, level dispatches {levels:?}, climb teams below \
+                 {climb_team_below:?}",
                 scene.triangles.len()
             );
             let mut cpu = stages.lbvh.clone();

@@ -26,9 +26,12 @@ use crate::scene::Triangle;
 use crate::sort::SORT_TILE_ITEMS;
 use crate::{Error, Result};
 
-/// Team thresholds a tuning tries (treelets per level below which teams of 32 optimize them; 0:
-/// never).
-const TEAM_THRESHOLDS: [u32; 4] = [0, 4, 16, 256];
+/// Team thresholds a tuning tries in the dispatched levels (treelets per level below which teams
+/// of 32 optimize them, a workgroup per treelet; 0: never). The dispatched levels mostly hold
+/// from a few hundred treelets (those above are climbed) to tens of thousands; a team's DP is
+/// ~46 partition tests deep instead of 966, at the cost of a warp per treelet. The climb's
+/// threshold is not tuned (`RoundSchedule::climb_team_below`: its teams lost on an H200).
+const TEAM_THRESHOLDS: [u32; 4] = [0, 256, 1024, 4096];
 /// Treelet levels per round optimized per subtree that a tuning tries (0: none; see
 /// `RoundSchedule::subtree_levels`).
 const SUBTREE_LEVEL_CHOICES: [u32; 4] = [0, 4, 6, 8];
@@ -284,6 +287,8 @@ impl Dimension {
                     })
                 })
                 .to_vec(),
+            // Overlapped rounds dispatch their waves by lone invocations: no teams to try.
+            Dimension::TeamBelow if k.overlap.is_some() => Vec::new(),
             Dimension::TeamBelow => TEAM_THRESHOLDS
                 .map(|below| {
                     rounds(RoundSchedule {
@@ -345,7 +350,9 @@ impl Dimension {
             }
             Dimension::Dp => ra.dp() == rb.dp(),
             Dimension::ClimbDp => ra.climb_dp() == rb.climb_dp(),
-            Dimension::TeamBelow => ra.team_below() == rb.team_below(),
+            Dimension::TeamBelow => {
+                (ra.overlap.is_some() && rb.overlap.is_some()) || ra.team_below() == rb.team_below()
+            }
             Dimension::LevelDispatches if space.round_levels_vary => {
                 ra.level_dispatches == rb.level_dispatches
             }
@@ -400,7 +407,10 @@ fn without_defaults(schedule: BuildSchedule, space: &TuningSpace) -> BuildSchedu
                 .filter(|&l| space.round_levels_vary || l != round_levels),
             team_below: r
                 .team_below
-                .filter(|&t| t != RoundSchedule::default().team_below()),
+                .filter(|&t| r.overlap.is_none() && t != RoundSchedule::default().team_below()),
+            climb_team_below: r
+                .climb_team_below
+                .filter(|&t| t != RoundSchedule::default().climb_team_below()),
             dp: r.dp.filter(|&dp| dp != TreeletDp::default()),
             climb_dp: r.climb_dp.filter(|&dp| dp != r.dp()),
             overlap: r.overlap,
@@ -688,7 +698,7 @@ mod tests {
     };
 
     /// A build time with one best value per dimension: overlap 6 (else subtrees of 6 levels, of
-    /// width 128), the loop DP in the climb, teams below 16, 11 dispatched levels, tiles of 16
+    /// width 128), the loop DP in the climb, teams below 1024, 11 dispatched levels, tiles of 16
     /// keys per invocation, 14 wide levels dispatched.
     fn cost(b: BuildSchedule) -> f64 {
         let s = b.rounds;
@@ -702,7 +712,7 @@ mod tests {
                 ms -= 0.3;
             }
         }
-        if s.team_below() == 16 {
+        if s.team_below() == 1024 {
             ms -= 0.5;
         }
         if s.climb_dp() == TreeletDp::Loop {
@@ -758,17 +768,18 @@ mod tests {
         // The kept schedule is labelled by what differs from the defaults.
         assert_eq!(
             kept.label(),
-            "d=11 t=16 climb-dp=loop overlap=6 tile=16 wd=14",
+            "d=11 climb-dp=loop overlap=6 tile=16 wd=14",
             "{kept:?}"
         );
         // Every kept schedule beat the one before it by the margin.
         for t in tuned.trials.iter().filter(|t| t.adopted) {
             assert!(t.candidate_ms.unwrap() < t.kept_ms.unwrap() * 0.98);
         }
-        // Teams were timed with the overlap too (they apply to its climb).
+        // Teams were not tried with the overlap (kept first), whose dispatched waves have none.
         assert!(timed
             .iter()
-            .any(|s| s.rounds.overlap.is_some() && s.rounds.team_below.is_some()));
+            .all(|s| s.rounds.overlap.is_none() || s.rounds.team_below.is_none()));
+        assert_eq!(kept.rounds.team_below(), 0);
         // Subtrees were tried before the overlap was kept, never with it.
         assert!(timed.iter().any(|s| s.rounds.subtree_levels() == 6));
         assert!(timed
@@ -851,8 +862,8 @@ mod tests {
         assert!(timed.iter().all(|s| s.rounds.overlap.is_none()
             && s.rounds.level_dispatches == Some(14)
             && s.sort_tile_items == Some(32)));
-        // Teams below 16 pay, and without the overlap subtrees of 6 levels.
-        assert_eq!(tuned.schedule.rounds.team_below(), 16);
+        // Teams below 1024 pay, and without the overlap subtrees of 6 levels.
+        assert_eq!(tuned.schedule.rounds.team_below(), 1024);
         assert_eq!(tuned.schedule.rounds.subtree_levels(), 6);
         assert_eq!(tuned.schedule.rounds.subtree_width, Some(128));
         assert_eq!(tuned.schedule.rounds.climb_dp(), TreeletDp::Loop);
@@ -880,7 +891,7 @@ mod tests {
         assert!(!failed[0].other_tree && failed[0].candidate_ms.is_none());
         assert!(timed.iter().all(|s| s.wide_level_dispatches != Some(23)));
         // The other dimensions still won.
-        assert_eq!(tuned.schedule.rounds.team_below(), 16);
+        assert_eq!(tuned.schedule.rounds.team_below(), 1024);
     }
 
     #[test]

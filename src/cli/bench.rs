@@ -59,11 +59,17 @@ pub struct BenchArgs {
     #[arg(long, value_delimiter = ',',
           value_parser = clap::value_parser!(u32).range(0..=i64::from(MAX_LEVEL_DISPATCHES)))]
     level_dispatches: Vec<u32>,
-    /// Treelet levels of fewer treelets than this are optimized by teams of 32 invocations, the
-    /// others one treelet per invocation (trbvh, trbvh-split; default: 0, never); a
-    /// comma-separated list to compare. The tree is the same for every value
+    /// Dispatched treelet levels of fewer treelets than this are optimized by teams of 32
+    /// invocations, a workgroup per treelet, the others one treelet per invocation (trbvh,
+    /// trbvh-split; default: 0, never; no effect with --round-overlap); a comma-separated list to
+    /// compare. The tree is the same for every value
     #[arg(long, value_delimiter = ',')]
     team_below: Vec<u32>,
+    /// The same for the climb's waves, which its four teams take a treelet each at a time: waves
+    /// of fewer treelets than this and than 32 (default: 0, never); a comma-separated list to
+    /// compare. The tree is the same for every value
+    #[arg(long, value_delimiter = ',')]
+    climb_team_below: Vec<u32>,
     /// How a lone invocation writes the treelet DP: unrolled (every subset and partition written
     /// out; the default) or loop (trbvh, trbvh-split); a comma-separated list to compare. The
     /// tree is the same for both
@@ -172,6 +178,7 @@ impl BenchArgs {
             &[
                 ("--level-dispatches", !self.level_dispatches.is_empty()),
                 ("--team-below", !self.team_below.is_empty()),
+                ("--climb-team-below", !self.climb_team_below.is_empty()),
                 ("--treelet-dp", !self.treelet_dp.is_empty()),
                 ("--climb-dp", !self.climb_dp.is_empty()),
                 ("--round-overlap", !self.round_overlap.is_empty()),
@@ -186,7 +193,10 @@ impl BenchArgs {
             .collect();
         let mut schedules = Vec::new();
         for level_dispatches in or_default(&self.level_dispatches) {
-            for team_below in or_default(&self.team_below) {
+            for (team_below, climb_team_below) in pairs(
+                &or_default(&self.team_below),
+                &or_default(&self.climb_team_below),
+            ) {
                 for dp in or_default(&self.treelet_dp) {
                     for climb_dp in or_default(&self.climb_dp) {
                         for &overlap in &overlaps {
@@ -195,6 +205,7 @@ impl BenchArgs {
                                     schedules.push(RoundSchedule {
                                         level_dispatches,
                                         team_below,
+                                        climb_team_below,
                                         dp: dp.map(TreeletDp::from),
                                         climb_dp: climb_dp.map(TreeletDp::from),
                                         overlap,
@@ -236,7 +247,12 @@ impl BenchArgs {
         let tune = match self.tune_schedule {
             TuneSchedule::On => true,
             TuneSchedule::Off => false,
-            TuneSchedule::Auto => tunes_by_default(gpu) && pins == SchedulePins::default(),
+            // The climb's teams are not tuned, but set, they are a schedule to time as given.
+            TuneSchedule::Auto => {
+                tunes_by_default(gpu)
+                    && pins == SchedulePins::default()
+                    && self.climb_team_below.is_empty()
+            }
         };
         Ok(tune.then_some(TuningOptions {
             pairs: self.tune_pairs,
@@ -255,6 +271,13 @@ impl BenchArgs {
         }
         Ok(or_default(&self.wide_level_dispatches))
     }
+}
+
+/// Every pair of a value of `a` and one of `b`.
+fn pairs<T: Copy>(a: &[T], b: &[T]) -> Vec<(T, T)> {
+    a.iter()
+        .flat_map(|&x| b.iter().map(move |&y| (x, y)))
+        .collect()
 }
 
 /// The values of a list option, or the default (None) where none is given.
@@ -287,9 +310,10 @@ struct BenchRecord {
     rounds: Option<u32>,
     split_budget: Option<f64>,
     /// Treelet builders: the levels per round given a dispatch (null: from the tree's size, per
-    /// round) and the team threshold in effect.
+    /// round) and the team thresholds in effect in the dispatched levels and in the climb.
     level_dispatches: Option<u32>,
     team_below: Option<u32>,
+    climb_team_below: Option<u32>,
     /// Treelet builders: the lone invocation's DP form in effect in the dispatched levels
     /// (`--treelet-dp`) and in the climb (`--climb-dp`).
     treelet_dp: Option<&'static str>,
@@ -609,6 +633,9 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
                 .map(|s| f64::from(s.split_percent) / 100.0),
             level_dispatches: schedule.level_dispatches,
             team_below: builder.treelet_settings().map(|_| schedule.team_below()),
+            climb_team_below: builder
+                .treelet_settings()
+                .map(|_| schedule.climb_team_below()),
             treelet_dp: builder.treelet_settings().map(|_| schedule.dp().name()),
             climb_dp: builder
                 .treelet_settings()

@@ -12,11 +12,12 @@
 //! atomics.
 //!
 //! Who optimizes a treelet: by default its own invocation, which runs the whole DP alone
-//! (throughput). On request (`RoundSchedule::team_below`) a level of fewer treelets gives each a
-//! team of 32 invocations that runs the DP's subsets of one size side by side, as the paper does
-//! with a warp (for latency: the levels near the top of a tree hold a few treelets each, and a
-//! tree has 20-40 levels per round, each waiting for the one before); measured, teams paid
-//! neither on lavapipe nor on an H200. Both find the same topology (same operations, same
+//! (throughput). On request (`RoundSchedule::team_below`) a dispatched level of fewer treelets
+//! gives each a team of 32 invocations that runs the DP's subsets of one size side by side, as
+//! the paper does with a warp (for latency: the levels near the top of a tree hold a few treelets
+//! each, and a tree has 20-40 levels per round, each waiting for the one before), and so does the
+//! climb for its small waves (`RoundSchedule::climb_team_below`); measured with one threshold for
+//! both, teams paid neither on lavapipe nor on an H200. Both find the same topology (same operations, same
 //! tie-breaking). The treelet size is a pipeline constant: the treelet kernels are compiled per
 //! size when first used, the lone DP written out for it (`dp_unrolled`), or as loops on request
 //! (`RoundSchedule::dp` for the dispatched levels, `RoundSchedule::climb_dp` for the climb, for
@@ -64,7 +65,9 @@ pub struct RoundParams {
     level_dispatches: u32,
     level: u32,
     levels_only: u32,
-    /// Levels of fewer treelets are optimized by teams (see the module header).
+    /// Levels of fewer treelets are optimized by teams (see the module header): in the
+    /// dispatched levels' kernels (and `nodes_level`, which sizes their dispatches)
+    /// `RoundSchedule::team_below`, in the climb's `RoundSchedule::climb_team_below`.
     team_below: u32,
     /// γ of the next round (u32::MAX: none), whose levels the treelet kernels compute.
     next_gamma: u32,
@@ -89,7 +92,8 @@ const _: () = assert!(std::mem::size_of::<RoundParams>() == 80);
 
 impl RoundParams {
     /// The parameters of the overlapped rounds' kernels (`waves`) for a tree of `n` leaves:
-    /// `overlap`'s rounds (γ_r = treelet size · 2^r), reach and team threshold, wave `wave`.
+    /// `overlap`'s rounds (γ_r = treelet size · 2^r), reach and the climb's team threshold, wave
+    /// `wave`.
     pub(crate) fn waves(n: u32, overlap: &Overlap, wave: u32) -> Self {
         let model = &overlap.model;
         Self {
@@ -103,7 +107,7 @@ impl RoundParams {
             level_dispatches: 0,
             level: 0,
             levels_only: 0,
-            team_below: overlap.team_below,
+            team_below: overlap.climb_team_below,
             next_gamma: u32::MAX,
             level_first: 0,
             rounds: overlap.rounds,
@@ -205,12 +209,16 @@ pub struct RoundSchedule {
     /// `MAX_LEVEL_DISPATCHES` (the rest are climbed by one workgroup); None: `level_dispatches`
     /// of the tree's size and the round's γ.
     pub level_dispatches: Option<u32>,
-    /// Levels (and climbed waves) of fewer treelets than this are optimized by teams of 32
-    /// invocations, the others one treelet per invocation; 0 never uses teams, u32::MAX uses them
-    /// for every level and every climbed wave of fewer than 32 treelets. With overlapped rounds
-    /// it applies to the climbed waves only (a dispatched wave runs a treelet per invocation).
-    /// None: `DEFAULT_TEAM_BELOW` (never).
+    /// Dispatched levels of fewer treelets than this are optimized by teams of 32 invocations
+    /// (a workgroup per treelet), the others one treelet per invocation; 0 never uses teams,
+    /// u32::MAX uses them for every dispatched level. Not with overlapped rounds, whose
+    /// dispatched waves run a treelet per invocation. None: `DEFAULT_TEAM_BELOW` (never).
     pub team_below: Option<u32>,
+    /// The same for the climb's waves (those of the overlapped rounds too), which the workgroup's
+    /// four teams take a treelet each at a time: waves of fewer treelets than this and than 32.
+    /// None: `DEFAULT_TEAM_BELOW` (never; it does not follow `team_below`, as a climbed wave of
+    /// many treelets takes several turns of the four teams).
+    pub climb_team_below: Option<u32>,
     /// How a lone invocation's DP is written (`TreeletDp`) in the dispatched levels; None:
     /// written out.
     pub dp: Option<TreeletDp>,
@@ -279,9 +287,14 @@ impl RoundSchedule {
         })
     }
 
-    /// The team threshold in effect.
+    /// The team threshold in effect in the dispatched levels.
     pub fn team_below(&self) -> u32 {
         self.team_below.unwrap_or(DEFAULT_TEAM_BELOW)
+    }
+
+    /// The team threshold in effect in the climb.
+    pub fn climb_team_below(&self) -> u32 {
+        self.climb_team_below.unwrap_or(DEFAULT_TEAM_BELOW)
     }
 
     /// The DP form in effect in the dispatched levels.
@@ -294,8 +307,8 @@ impl RoundSchedule {
         self.climb_dp.unwrap_or_else(|| self.dp())
     }
 
-    /// The options that are set, as `treelet bench` labels its runs ("d=14 t=16 dp=loop
-    /// climb-dp=loop overlap=6 subtrees=6"; "default" when none is).
+    /// The options that are set, as `treelet bench` labels its runs ("d=14 t=1024 climb-t=4
+    /// dp=loop climb-dp=loop overlap=6 subtrees=6"; "default" when none is).
     pub fn label(&self) -> String {
         let mut parts = Vec::new();
         if let Some(levels) = self.level_dispatches {
@@ -303,6 +316,9 @@ impl RoundSchedule {
         }
         if let Some(below) = self.team_below {
             parts.push(format!("t={below}"));
+        }
+        if let Some(below) = self.climb_team_below {
+            parts.push(format!("climb-t={below}"));
         }
         if let Some(dp) = self.dp {
             parts.push(format!("dp={}", dp.name()));
@@ -332,12 +348,16 @@ impl RoundSchedule {
     }
 }
 
-/// The level size below which teams optimize the treelets by default: 0, never. On lavapipe
-/// invocations are SIMD lanes and every barrier switches between them: teams cost ~17x more per
-/// treelet (field:224: treelet stage 205 ms never, 228 ms below 64, 3.6 s always). On an H200
-/// teams did not pay either, not even near the top of the tree where a level holds a few
-/// treelets: trbvh with 16 levels dispatched, conference 4.49 ms never, 7.54 ms below 512,
-/// 8.37 ms below 4096; field:707 5.40, 6.44 and 7.36 ms (`scripts/gpu-schedules.sh`).
+/// The level (and climbed wave) size below which teams optimize the treelets by default: 0,
+/// never. On lavapipe invocations are SIMD lanes and every barrier switches between them: teams
+/// cost ~17x more per treelet (field:224: treelet stage 205 ms never, 228 ms below 64, 3.6 s
+/// always). On an H200, with one threshold for the levels and the climb's waves, teams did not
+/// pay either: trbvh with 16 levels dispatched, conference 4.49 ms never, 7.54 ms below 512,
+/// 8.37 ms below 4096; field:707 5.40, 6.44 and 7.36 ms; below 4, which reaches the climb's
+/// smallest waves only, conference 4.60 ms (`scripts/gpu-schedules.sh`). Those thresholds also
+/// gave teams every climbed wave of up to 31 treelets, four at a time, so the dispatched levels'
+/// teams alone are not measured yet: the two thresholds are apart now, and the tuning tries the
+/// levels' alone (`tuning::TEAM_THRESHOLDS`).
 const DEFAULT_TEAM_BELOW: u32 = 0;
 
 /// `RoundSchedule::subtree_width` on GPUs: the fastest of the widths timed on an NVIDIA H200
@@ -510,6 +530,7 @@ impl TreeletRounds {
         drop(pass);
         params.level = dispatched + 1;
         params.level_first = first_slot(dispatched + 1);
+        params.team_below = self.schedule.climb_team_below();
         let mut climb_buffers = treelet_buffers.to_vec();
         climb_buffers.extend([state.levels, state.arrivals, state.waves]);
         let climb = self

@@ -80,7 +80,7 @@ pub(crate) struct Overlap {
     pub dp: TreeletDp,
     pub climb_dp: TreeletDp,
     /// Climbed waves of fewer treelets than this (and than 32) are optimized by teams.
-    pub team_below: u32,
+    pub climb_team_below: u32,
 }
 
 impl OverlappedRounds {
