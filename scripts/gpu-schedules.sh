@@ -4,16 +4,18 @@
 # each of OVERLAPS, default 6: fewer waves dispatched (OVERLAP_LEVELS per round, the rest climbed),
 # and the loop DP at the default count), teams in the dispatched levels (--team-below, the
 # climb's left without; also with TEAM_LEVELS levels dispatched, default 20 and 32: small levels
-# by teams instead of the climb), and with LEVELS set every combination of those
-# --level-dispatches and --team-below (the defaults came from such a sweep in the first H200
-# session; the same tree each time, tested); then lbvh and trbvh at each --climb-width.
+# by teams instead of the climb), teams in the climb's small waves (--climb-team-below), and with
+# LEVELS set every combination of those --level-dispatches and --team-below (the defaults came
+# from such a sweep in the first H200 session; the same tree each time, tested); then lbvh and
+# trbvh at each --climb-width.
 # Here, first:   bash ../shared/gpu/pack.sh
 # Then `run` with carry [".gpu", ".gl"] and the command:   bash scripts/gpu-schedules.sh
 # JSON lines go to $OUT/schedules.jsonl and $OUT/climbs.jsonl; a table of the climb widths, then
 # one of build ms and the two treelet stages, fastest first per scene, are printed last. SCENES,
-# LEVELS, TEAMS, TEAM_LEVELS, DPS, OVERLAPS, OVERLAP_LEVELS, CLIMBS and REPEATS override the sweep; with TREELET
-# set to a treelet binary it runs that one here instead (a dry run on lavapipe:
-# TREELET=target/release/treelet SCENES=field:100 LEVELS=0,4 TEAMS=0,64 REPEATS=1 bash scripts/gpu-schedules.sh).
+# LEVELS, TEAMS, TEAM_LEVELS, CLIMB_TEAMS, DPS, OVERLAPS, OVERLAP_LEVELS, CLIMBS and REPEATS
+# override the sweep; with TREELET set to a treelet binary it runs that one here instead (a dry
+# run on lavapipe: TREELET=target/release/treelet SCENES=field:100 LEVELS=0,4 TEAMS=0,64
+# TEAM_LEVELS=20 CLIMB_TEAMS=5 OVERLAP_LEVELS=8 CLIMBS=32 REPEATS=1 bash scripts/gpu-schedules.sh).
 set -u
 . scripts/gpu-env.sh
 : > "$out/schedules.jsonl"
@@ -29,7 +31,7 @@ for s in ${SCENES:-conference sibenik field:707}; do
       "--round-overlap ${OVERLAPS:-6}" \
       "--round-overlap ${OVERLAPS:-6} --level-dispatches ${OVERLAP_LEVELS:-8,11}" \
       "--round-overlap ${OVERLAPS:-6} --treelet-dp loop" \
-      "--team-below ${TEAMS:-256,1024,4096}" \
+      "--team-below ${TEAMS:-256,1024,4096}" "--climb-team-below ${CLIMB_TEAMS:-5,9}" \
       "--level-dispatches ${TEAM_LEVELS:-20,32} --team-below 0,${TEAMS:-256,1024,4096}" \
       ${sweep:+"$sweep"}; do
     # shellcheck disable=SC2086

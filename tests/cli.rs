@@ -399,8 +399,11 @@ fn bench_tunes_the_schedule_on_request() {
         if treelets {
             let team_below = value("t=").map_or(0, |t| t.parse().unwrap());
             assert_eq!(record["team_below"], team_below, "{kept} {record}");
-            // The climb's teams are not tuned.
-            assert_eq!(record["climb_team_below"], 0, "{kept} {record}");
+            let climb_team_below = value("climb-t=").map_or(0, |t| t.parse().unwrap());
+            assert_eq!(
+                record["climb_team_below"], climb_team_below,
+                "{kept} {record}"
+            );
             let dp = if parts.contains(&"dp=loop") {
                 "loop"
             } else {

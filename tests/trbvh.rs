@@ -885,6 +885,7 @@ fn a_tuned_schedule_builds_the_untuned_tree() {
     assert!(tried(&|s| s.rounds.climb_dp() == TreeletDp::Loop));
     assert!(tried(&|s| s.rounds.level_dispatches.is_some()));
     assert!(tried(&|s| s.rounds.team_below() != 0) || tuned.trials[0].adopted);
+    assert!(tried(&|s| s.rounds.climb_team_below() != 0));
     assert!(tried(&|s| s.sort_tile_items.is_some()));
     assert!(tried(&|s| s.wide_level_dispatches.is_some()));
     assert!(tuned.builds as usize >= 3 * tuned.trials.len());

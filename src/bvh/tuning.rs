@@ -29,9 +29,12 @@ use crate::{Error, Result};
 /// Team thresholds a tuning tries in the dispatched levels (treelets per level below which teams
 /// of 32 optimize them, a workgroup per treelet; 0: never). The dispatched levels mostly hold
 /// from a few hundred treelets (those above are climbed) to tens of thousands; a team's DP is
-/// ~46 partition tests deep instead of 966, at the cost of a warp per treelet. The climb's
-/// threshold is not tuned (`RoundSchedule::climb_team_below`: its teams lost on an H200).
+/// ~46 partition tests deep instead of 966, at the cost of a warp per treelet.
 const TEAM_THRESHOLDS: [u32; 4] = [0, 256, 1024, 4096];
+/// The same for the climb's waves (`RoundSchedule::climb_team_below`), which its four teams take
+/// a treelet each at a time: waves of up to 4 treelets in one turn, of up to 8 in two (more lost
+/// on an H200 with the team DP's older form).
+const CLIMB_TEAM_THRESHOLDS: [u32; 3] = [0, 5, 9];
 /// Treelet levels per round optimized per subtree that a tuning tries (0: none; see
 /// `RoundSchedule::subtree_levels`).
 const SUBTREE_LEVEL_CHOICES: [u32; 4] = [0, 4, 6, 8];
@@ -106,6 +109,7 @@ pub struct SchedulePins {
     pub dp: bool,
     pub climb_dp: bool,
     pub team_below: bool,
+    pub climb_team_below: bool,
     pub level_dispatches: bool,
     pub sort_tile_items: bool,
     pub wide_level_dispatches: bool,
@@ -181,19 +185,21 @@ enum Dimension {
     Dp,
     ClimbDp,
     TeamBelow,
+    ClimbTeamBelow,
     LevelDispatches,
     SortTile,
     WideLevels,
 }
 
 impl Dimension {
-    const ALL: [Dimension; 9] = [
+    const ALL: [Dimension; 10] = [
         Dimension::Overlap,
         Dimension::Subtrees,
         Dimension::SubtreeWidth,
         Dimension::Dp,
         Dimension::ClimbDp,
         Dimension::TeamBelow,
+        Dimension::ClimbTeamBelow,
         Dimension::LevelDispatches,
         Dimension::SortTile,
         Dimension::WideLevels,
@@ -207,6 +213,7 @@ impl Dimension {
             Dimension::Dp => pins.dp,
             Dimension::ClimbDp => pins.climb_dp,
             Dimension::TeamBelow => pins.team_below,
+            Dimension::ClimbTeamBelow => pins.climb_team_below,
             Dimension::LevelDispatches => pins.level_dispatches,
             Dimension::SortTile => pins.sort_tile_items,
             Dimension::WideLevels => pins.wide_level_dispatches,
@@ -297,6 +304,14 @@ impl Dimension {
                     })
                 })
                 .to_vec(),
+            Dimension::ClimbTeamBelow => CLIMB_TEAM_THRESHOLDS
+                .map(|below| {
+                    rounds(RoundSchedule {
+                        climb_team_below: Some(below),
+                        ..k
+                    })
+                })
+                .to_vec(),
             Dimension::LevelDispatches => stepped_counts(
                 space.round_levels,
                 LEVEL_DISPATCH_STEPS,
@@ -353,6 +368,7 @@ impl Dimension {
             Dimension::TeamBelow => {
                 (ra.overlap.is_some() && rb.overlap.is_some()) || ra.team_below() == rb.team_below()
             }
+            Dimension::ClimbTeamBelow => ra.climb_team_below() == rb.climb_team_below(),
             Dimension::LevelDispatches if space.round_levels_vary => {
                 ra.level_dispatches == rb.level_dispatches
             }
@@ -698,7 +714,8 @@ mod tests {
     };
 
     /// A build time with one best value per dimension: overlap 6 (else subtrees of 6 levels, of
-    /// width 128), the loop DP in the climb, teams below 1024, 11 dispatched levels, tiles of 16
+    /// width 128), the loop DP in the climb, teams below 1024 (in the climb below 5), 11
+    /// dispatched levels, tiles of 16
     /// keys per invocation, 14 wide levels dispatched.
     fn cost(b: BuildSchedule) -> f64 {
         let s = b.rounds;
@@ -714,6 +731,9 @@ mod tests {
         }
         if s.team_below() == 1024 {
             ms -= 0.5;
+        }
+        if s.climb_team_below() == 5 {
+            ms -= 0.3;
         }
         if s.climb_dp() == TreeletDp::Loop {
             ms -= 0.5;
@@ -768,7 +788,7 @@ mod tests {
         // The kept schedule is labelled by what differs from the defaults.
         assert_eq!(
             kept.label(),
-            "d=11 climb-dp=loop overlap=6 tile=16 wd=14",
+            "d=11 climb-t=5 climb-dp=loop overlap=6 tile=16 wd=14",
             "{kept:?}"
         );
         // Every kept schedule beat the one before it by the margin.
@@ -867,6 +887,7 @@ mod tests {
         assert_eq!(tuned.schedule.rounds.subtree_levels(), 6);
         assert_eq!(tuned.schedule.rounds.subtree_width, Some(128));
         assert_eq!(tuned.schedule.rounds.climb_dp(), TreeletDp::Loop);
+        assert_eq!(tuned.schedule.rounds.climb_team_below(), 5);
         assert_eq!(tuned.schedule.wide_level_dispatches, Some(14));
     }
 

@@ -240,6 +240,7 @@ impl BenchArgs {
             dp: !self.treelet_dp.is_empty(),
             climb_dp: !self.climb_dp.is_empty(),
             team_below: !self.team_below.is_empty(),
+            climb_team_below: !self.climb_team_below.is_empty(),
             level_dispatches: !self.level_dispatches.is_empty(),
             sort_tile_items: self.sort_tile_items.is_some(),
             wide_level_dispatches: !self.wide_level_dispatches.is_empty(),
@@ -247,12 +248,7 @@ impl BenchArgs {
         let tune = match self.tune_schedule {
             TuneSchedule::On => true,
             TuneSchedule::Off => false,
-            // The climb's teams are not tuned, but set, they are a schedule to time as given.
-            TuneSchedule::Auto => {
-                tunes_by_default(gpu)
-                    && pins == SchedulePins::default()
-                    && self.climb_team_below.is_empty()
-            }
+            TuneSchedule::Auto => tunes_by_default(gpu) && pins == SchedulePins::default(),
         };
         Ok(tune.then_some(TuningOptions {
             pairs: self.tune_pairs,

@@ -356,8 +356,8 @@ impl RoundSchedule {
 /// 8.37 ms below 4096; field:707 5.40, 6.44 and 7.36 ms; below 4, which reaches the climb's
 /// smallest waves only, conference 4.60 ms (`scripts/gpu-schedules.sh`). Those thresholds also
 /// gave teams every climbed wave of up to 31 treelets, four at a time, so the dispatched levels'
-/// teams alone are not measured yet: the two thresholds are apart now, and the tuning tries the
-/// levels' alone (`tuning::TEAM_THRESHOLDS`).
+/// teams alone are not measured yet: the two thresholds are apart now, and the tuning tries
+/// each alone (`tuning::TEAM_THRESHOLDS`, `tuning::CLIMB_TEAM_THRESHOLDS`).
 const DEFAULT_TEAM_BELOW: u32 = 0;
 
 /// `RoundSchedule::subtree_width` on GPUs: the fastest of the widths timed on an NVIDIA H200
