@@ -13,13 +13,13 @@
 //!
 //! Who optimizes a treelet: by default its own invocation, which runs the whole DP alone
 //! (throughput). On request (`RoundSchedule::team_below`) a dispatched level of fewer treelets
-//! gives each a team of 32 invocations that runs the DP's subsets of one size side by side, as
-//! the paper does with a warp (for latency: the levels near the top of a tree hold a few treelets
-//! each, and a tree has 20-40 levels per round, each waiting for the one before), and so does the
-//! climb for its small waves (`RoundSchedule::climb_team_below`); measured with one threshold for
-//! both, teams paid neither on lavapipe nor on an H200. Both find the same topology (same operations, same
-//! tie-breaking). The treelet size is a pipeline constant: the treelet kernels are compiled per
-//! size when first used, the lone DP written out for it (`dp_unrolled`), or as loops on request
+//! gives each a team of 32 invocations that runs the DP's subsets of one size side by side, as the
+//! paper does with a warp (for latency: the levels near the top of a tree hold a few treelets each,
+//! and a tree has 20-40 levels per round, each waiting for the one before), and so does the climb
+//! for its small waves (`RoundSchedule::climb_team_below`); measured with one threshold for both,
+//! teams paid neither on lavapipe nor on an H200. Both find the same topology (same operations,
+//! same tie-breaking). The treelet size is a pipeline constant: the treelet kernels are compiled
+//! per size when first used, the lone DP written out for it (`dp_unrolled`), or as loops on request
 //! (`RoundSchedule::dp` for the dispatched levels, `RoundSchedule::climb_dp` for the climb, for
 //! GPUs to compare; the same tree). On request the rounds run overlapped in waves instead
 //! (`RoundSchedule::overlap`, module `waves`), after the first round's schedule here. On request
@@ -27,8 +27,8 @@
 //! `subtrees_optimize`): the schedule buckets only the roots of the disjoint subtrees that hold
 //! them (of level K at most, their parent above), each in its level's bucket, and each workgroup
 //! optimizes a few of these subtrees depth by depth between workgroup barriers, where a dispatch
-//! per level pays its launch and the wait for its slowest treelet (a floor of ~24 µs a level on
-//! an H200; README, "Where a small treelet level's time goes"); the levels above as before.
+//! per level pays its launch and the wait for its slowest treelet (a floor of ~24 µs a level on an
+//! H200; README, "Where a small treelet level's time goes"); the levels above as before.
 
 use std::sync::OnceLock;
 
@@ -228,8 +228,9 @@ pub struct RoundSchedule {
     /// The rounds overlapped in waves with this reach (`waves`, the GPU twin of
     /// `WorkingTree::optimize_overlapped`), each round starting on a root once it and its
     /// ancestors within the reach are done in the round before; at least `overlap_reach` of the
-    /// treelet size (a build refuses less); None: the rounds one after another. The level dispatches (above) times the rounds are the waves dispatched, the
-    /// climb takes the rest; teams apply to the climb's waves.
+    /// treelet size (a build refuses less); None: the rounds one after another. The level
+    /// dispatches (above) times the rounds are the waves dispatched, the climb takes the rest;
+    /// only the climb's waves have teams (`climb_team_below`).
     pub overlap: Option<u32>,
     /// Treelet levels 1 ..= K of each round optimized per subtree (`subtrees_optimize`), K at
     /// most `MAX_SUBTREE_LEVELS`: one dispatch, each workgroup taking a few of the subtrees whose
