@@ -51,24 +51,6 @@ fn climb_wave_by_teams(treelets: u32) -> bool {
     return treelets < min(params.team_below, TEAM_WAVE);
 }
 
-// C(n, k) for n <= 8 (exact: each step's product is divisible).
-fn binomial(n: u32, k: u32) -> u32 {
-    var c = 1u;
-    for (var j = 0u; j < k; j++) {
-        c = c * (n - j) / (j + 1u);
-    }
-    return c;
-}
-
-// First entry of the subsets of size k in `subset_order`.
-fn subsets_of_size(k: u32) -> u32 {
-    var first = 0u;
-    for (var j = 0u; j < k; j++) {
-        first += binomial(MAX_TREELET, j);
-    }
-    return first;
-}
-
 fn team_subset_min(base: u32, s: u32) -> vec3<f32> {
     return min(team_low_min[base + (s & 15u)], team_high_min[base + (s >> 4u)]);
 }
@@ -161,8 +143,14 @@ fn optimize_treelet_team(root: u32, has_treelet: bool, team: u32, lane: u32) {
     // Step 3.
     var full_split = 0u;
     var full_best = F32_MAX;
+    // Per size k, carried from size to size with one exact division each (C(n, k + 1) =
+    // C(n, k)·(n − k) / (k + 1)), not recomputed by loops of divisions: the subsets of size k,
+    // C(m, k), and where they start in `subset_order`, the subsets of fewer leaves of
+    // MAX_TREELET, Σ_{j<k} C(MAX_TREELET, j).
+    var count = m * (m - 1u) / 2u;
+    var first = 1u + MAX_TREELET;
+    var of_max_size = MAX_TREELET * (MAX_TREELET - 1u) / 2u;
     for (var k = 2u; k <= m; k++) {
-        let count = binomial(m, k);
         // Lanes per subset, 2^b: the largest power of two with count * L <= TEAM_LANES, at least
         // 1, and at most the subset's 2^(k-1) - 1 partitions (rounded up).
         let b = min(firstLeadingBit(max(TEAM_LANES / count, 1u)), k - 1u);
@@ -170,7 +158,6 @@ fn optimize_treelet_team(root: u32, has_treelet: bool, team: u32, lane: u32) {
         let side_by_side = TEAM_LANES >> b;
         let group = lane >> b;
         let turn = lane & (per_subset - 1u);
-        let first = subsets_of_size(k);
         for (var done = 0u; done < count; done += side_by_side) {
             let index = done + group;
             let valid = has_treelet && index < count;
@@ -234,6 +221,9 @@ fn optimize_treelet_team(root: u32, has_treelet: bool, team: u32, lane: u32) {
             }
             workgroupBarrier();
         }
+        first += of_max_size;
+        of_max_size = of_max_size * (MAX_TREELET - k) / (k + 1u);
+        count = count * (m - k) / (k + 1u);
     }
     // Step 4: lane 0 holds the full set's partition (its only subset of size m).
     if has_treelet && lane == 0u {
