@@ -1,7 +1,8 @@
 // Overlapped treelet rounds, step 1 of a wave (treelet_waves.wgsl): each of the wave's candidates
 // goes to the wave's treelets, to the next wave's candidates or nowhere. The workgroup that
-// finishes last writes the arguments of the wave's optimize dispatch; a wave without treelets
-// stops the rounds (no later wave could find one: nothing changes any more).
+// finishes last writes the arguments of the wave's optimize dispatch (a workgroup per 32
+// treelets, or per treelet below params.team_below: waves_optimize.wgsl); a wave without
+// treelets stops the rounds (no later wave could find one: nothing changes any more).
 #include "bvh_node.wgsl"
 #include "treelet_round.wgsl"
 
@@ -34,7 +35,7 @@ fn main(
     }
     if last_workgroup(lid, nwg.x * nwg.y, FIND_TICKET) && lid == 0u {
         let treelets = atomicLoad(&wave_state[OPS_COUNT]);
-        let args = wave_args(treelets);
+        let args = wave_args(treelets, select(WAVE_WORKGROUP, 1u, treelets < params.team_below));
         optimize_args[0] = args.x;
         optimize_args[1] = args.y;
         optimize_args[2] = args.z;

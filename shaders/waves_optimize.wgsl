@@ -1,9 +1,13 @@
 // Overlapped treelet rounds, step 2 of a wave (treelet_waves.wgsl): each of the wave's treelets,
-// one per invocation (treelet_dp.wgsl), and the candidates it adds to the next wave. The
-// workgroup that finishes last writes the next wave's find arguments and clears this wave's
-// counts (the candidates its find read, its treelets).
+// one per invocation (treelet_dp.wgsl), or in a wave of fewer than params.team_below treelets
+// one per workgroup, whose 32 invocations share its DP (treelet_team.wgsl; waves_find.wgsl sized
+// the dispatch accordingly), and the candidates it adds to the next wave. The workgroup that
+// finishes last writes the next wave's find arguments and clears this wave's counts (the
+// candidates its find read, its treelets).
 #include "bvh_node.wgsl"
 #include "treelet_round.wgsl"
+
+const TEAMS: u32 = 1u;
 
 @group(0) @binding(0) var<uniform> params: RoundParams;
 @group(0) @binding(1) var<storage, read_write> nodes: array<BvhNode>;
@@ -19,8 +23,11 @@
 @group(0) @binding(9) var<storage, read_write> wave_state: array<atomic<u32>>;
 // The next wave's find dispatch's indirect arguments.
 @group(0) @binding(10) var<storage, read_write> find_args: array<u32>;
+// `treelet::subsets_by_size`, for the teams.
+@group(0) @binding(11) var<storage, read> subset_order: array<u32>;
 
 #include "treelet_dp.wgsl"
+#include "treelet_team.wgsl"
 #include "treelet_waves.wgsl"
 #include "treelet_wave_optimize.wgsl"
 
@@ -34,12 +41,24 @@ fn main(
     if rounds_stopped(lid) {
         return;
     }
-    let i = (wid.x + wid.y * nwg.x) * WAVE_WORKGROUP + lid;
-    if i < atomicLoad(&wave_state[OPS_COUNT]) {
-        optimize_entry(lists[ops_base() + i], wave);
+    let treelets = state_word(lid, OPS_COUNT);
+    let group = wid.x + wid.y * nwg.x;
+    if treelets < params.team_below {
+        let has_treelet = group < treelets;
+        let entry = lists[ops_base() + min(group, max(treelets, 1u) - 1u)];
+        queued = 0u;
+        optimize_treelet_team(entry & NODE_MASK, has_treelet, 0u, lid);
+        if has_treelet && lid == 0u {
+            finish_entry(entry, wave);
+        }
+    } else {
+        let i = group * WAVE_WORKGROUP + lid;
+        if i < treelets {
+            optimize_entry(lists[ops_base() + i], wave);
+        }
     }
     if last_workgroup(lid, nwg.x * nwg.y, OPTIMIZE_TICKET) && lid == 0u {
-        let args = wave_args(atomicLoad(&wave_state[CANDIDATE_COUNT + ((wave + 1u) & 1u)]));
+        let args = wave_args(atomicLoad(&wave_state[CANDIDATE_COUNT + ((wave + 1u) & 1u)]), WAVE_WORKGROUP);
         find_args[0] = args.x;
         find_args[1] = args.y;
         find_args[2] = args.z;

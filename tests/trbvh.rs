@@ -726,27 +726,31 @@ fn overlapped_rounds_on_the_gpu_equal_the_cpu_twin() {
         let geometry = Geometry::upload(gpu(), &scene).unwrap();
         builder.set_schedule(RoundSchedule::default());
         let sequential = builder.build_stages(gpu(), &geometry).unwrap();
-        // (level dispatches, the climb's team threshold): its waves by teams where they are few.
+        // (level dispatches, the dispatched waves' team threshold, the climb's): their waves by
+        // teams where they are few, or all of them.
         let schedules = [
-            (None, None),
-            (Some(0), None),
-            (Some(1), None),
-            (None, Some(u32::MAX)),
-            (Some(0), Some(u32::MAX)),
+            (None, None, None),
+            (Some(0), None, None),
+            (Some(1), None, None),
+            (None, None, Some(u32::MAX)),
+            (Some(0), None, Some(u32::MAX)),
+            (None, Some(256), None),
+            (Some(1), Some(u32::MAX), Some(u32::MAX)),
         ];
         // The least reach for the treelet size: 6 for 7 leaves, 7 for the high preset's 8.
         let reach = overlap_reach(settings.treelet_size);
-        for (levels, climb_team_below) in schedules {
+        for (levels, team_below, climb_team_below) in schedules {
             builder.set_schedule(RoundSchedule {
                 level_dispatches: levels,
+                team_below,
                 climb_team_below,
                 overlap: Some(reach),
                 ..RoundSchedule::default()
             });
             let stages = builder.build_stages(gpu(), &geometry).unwrap();
             let what = format!(
-                "{} triangles, {settings:?}, level dispatches {levels:?}, climb teams below \
-                 {climb_team_below:?}",
+                "{} triangles, {settings:?}, level dispatches {levels:?}, teams below \
+                 {team_below:?}, climb teams below {climb_team_below:?}",
                 scene.triangles.len()
             );
             let mut cpu = stages.lbvh.clone();

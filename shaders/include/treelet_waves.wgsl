@@ -169,10 +169,9 @@ fn find_candidate(entry: u32, wave: u32) {
     }
 }
 
-// The indirect arguments (x, y, z) of a dispatch over `items` entries, WAVE_WORKGROUP per
-// workgroup.
-fn wave_args(items: u32) -> vec3<u32> {
-    let groups = (items + WAVE_WORKGROUP - 1u) / WAVE_WORKGROUP;
+// The indirect arguments (x, y, z) of a dispatch over `items` entries, `per_group` per workgroup.
+fn wave_args(items: u32, per_group: u32) -> vec3<u32> {
+    let groups = (items + per_group - 1u) / per_group;
     let y = (groups + MAX_WORKGROUPS_X - 1u) / MAX_WORKGROUPS_X;
     return vec3<u32>(select(0u, (groups + y - 1u) / max(y, 1u), y > 0u), y, 1u);
 }

@@ -29,7 +29,8 @@ use crate::{Error, Result};
 /// Team thresholds a tuning tries in the dispatched levels (treelets per level below which teams
 /// of 32 optimize them, a workgroup per treelet; 0: never). The dispatched levels mostly hold
 /// from a few hundred treelets (those above are climbed) to tens of thousands; a team's DP is
-/// ~46 partition tests deep instead of 966, at the cost of a warp per treelet.
+/// ~46 partition tests deep instead of 966, at the cost of a warp per treelet. With overlapped
+/// rounds it applies to their dispatched waves.
 const TEAM_THRESHOLDS: [u32; 4] = [0, 256, 1024, 4096];
 /// The same for the climb's waves (`RoundSchedule::climb_team_below`), which its four teams take
 /// a treelet each at a time: waves of up to 4 treelets in one turn, of up to 8 in two (more lost
@@ -192,8 +193,8 @@ enum Dimension {
 }
 
 impl Dimension {
-    /// In the order a descent tries them: the dispatched levels' teams before the overlap, as
-    /// overlapped rounds have none (once the overlap is kept they are not tried).
+    /// In the order a descent tries them: the dispatched levels' teams first, with the rounds one
+    /// after another (the default), then the overlap (its dispatched waves take the kept teams).
     const ALL: [Dimension; 10] = [
         Dimension::TeamBelow,
         Dimension::Overlap,
@@ -296,8 +297,6 @@ impl Dimension {
                     })
                 })
                 .to_vec(),
-            // Overlapped rounds dispatch their waves by lone invocations: no teams to try.
-            Dimension::TeamBelow if k.overlap.is_some() => Vec::new(),
             Dimension::TeamBelow => TEAM_THRESHOLDS
                 .map(|below| {
                     rounds(RoundSchedule {
@@ -367,9 +366,7 @@ impl Dimension {
             }
             Dimension::Dp => ra.dp() == rb.dp(),
             Dimension::ClimbDp => ra.climb_dp() == rb.climb_dp(),
-            Dimension::TeamBelow => {
-                (ra.overlap.is_some() && rb.overlap.is_some()) || ra.team_below() == rb.team_below()
-            }
+            Dimension::TeamBelow => ra.team_below() == rb.team_below(),
             Dimension::ClimbTeamBelow => ra.climb_team_below() == rb.climb_team_below(),
             Dimension::LevelDispatches if space.round_levels_vary => {
                 ra.level_dispatches == rb.level_dispatches
@@ -425,7 +422,7 @@ fn without_defaults(schedule: BuildSchedule, space: &TuningSpace) -> BuildSchedu
                 .filter(|&l| space.round_levels_vary || l != round_levels),
             team_below: r
                 .team_below
-                .filter(|&t| r.overlap.is_none() && t != RoundSchedule::default().team_below()),
+                .filter(|&t| t != RoundSchedule::default().team_below()),
             climb_team_below: r
                 .climb_team_below
                 .filter(|&t| t != RoundSchedule::default().climb_team_below()),
@@ -790,19 +787,18 @@ mod tests {
         // The kept schedule is labelled by what differs from the defaults.
         assert_eq!(
             kept.label(),
-            "d=11 climb-t=5 climb-dp=loop overlap=6 tile=16 wd=14",
+            "d=11 t=1024 climb-t=5 climb-dp=loop overlap=6 tile=16 wd=14",
             "{kept:?}"
         );
         // Every kept schedule beat the one before it by the margin.
         for t in tuned.trials.iter().filter(|t| t.adopted) {
             assert!(t.candidate_ms.unwrap() < t.kept_ms.unwrap() * 0.98);
         }
-        // Teams were tried (and kept) before the overlap, which has none: the kept schedule
-        // drops them.
+        // Teams were tried (and kept) before the overlap, which then took them.
         assert!(timed
             .iter()
             .any(|s| s.rounds.overlap.is_none() && s.rounds.team_below() == 1024));
-        assert_eq!(kept.rounds.team_below, None);
+        assert_eq!(kept.rounds.team_below(), 1024);
         // Subtrees were tried before the overlap was kept, never with it.
         assert!(timed.iter().any(|s| s.rounds.subtree_levels() == 6));
         assert!(timed

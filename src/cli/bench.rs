@@ -61,8 +61,8 @@ pub struct BenchArgs {
     level_dispatches: Vec<u32>,
     /// Dispatched treelet levels of fewer treelets than this are optimized by teams of 32
     /// invocations, a workgroup per treelet, the others one treelet per invocation (trbvh,
-    /// trbvh-split; default: 0, never; no effect with --round-overlap); a comma-separated list to
-    /// compare. The tree is the same for every value
+    /// trbvh-split; default: 0, never; with --round-overlap, its dispatched waves); a
+    /// comma-separated list to compare. The tree is the same for every value
     #[arg(long, value_delimiter = ',')]
     team_below: Vec<u32>,
     /// The same for the climb's waves, which its four teams take a treelet each at a time: waves

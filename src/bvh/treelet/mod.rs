@@ -523,6 +523,7 @@ impl TrbvhBuilder {
                     dispatched: levels * rounds,
                     dp: self.rounds.schedule.dp(),
                     climb_dp: self.rounds.schedule.climb_dp(),
+                    team_below: self.rounds.schedule.team_below(),
                     climb_team_below: self.rounds.schedule.climb_team_below(),
                 };
                 self.waves.record(

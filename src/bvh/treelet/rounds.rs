@@ -92,8 +92,8 @@ const _: () = assert!(std::mem::size_of::<RoundParams>() == 80);
 
 impl RoundParams {
     /// The parameters of the overlapped rounds' kernels (`waves`) for a tree of `n` leaves:
-    /// `overlap`'s rounds (γ_r = treelet size · 2^r), reach and the climb's team threshold, wave
-    /// `wave`.
+    /// `overlap`'s rounds (γ_r = treelet size · 2^r) and reach, wave `wave`, and the team
+    /// threshold of a dispatched wave, or the climb's past them.
     pub(crate) fn waves(n: u32, overlap: &Overlap, wave: u32) -> Self {
         let model = &overlap.model;
         Self {
@@ -107,7 +107,11 @@ impl RoundParams {
             level_dispatches: 0,
             level: 0,
             levels_only: 0,
-            team_below: overlap.climb_team_below,
+            team_below: if wave > overlap.dispatched {
+                overlap.climb_team_below
+            } else {
+                overlap.team_below
+            },
             next_gamma: u32::MAX,
             level_first: 0,
             rounds: overlap.rounds,
@@ -209,10 +213,10 @@ pub struct RoundSchedule {
     /// `MAX_LEVEL_DISPATCHES` (the rest are climbed by one workgroup); None: `level_dispatches`
     /// of the tree's size and the round's γ.
     pub level_dispatches: Option<u32>,
-    /// Dispatched levels of fewer treelets than this are optimized by teams of 32 invocations
-    /// (a workgroup per treelet), the others one treelet per invocation; 0 never uses teams,
-    /// u32::MAX uses them for every dispatched level. Not with overlapped rounds, whose
-    /// dispatched waves run a treelet per invocation. None: `DEFAULT_TEAM_BELOW` (never).
+    /// Dispatched levels (and, with overlapped rounds, dispatched waves) of fewer treelets than
+    /// this are optimized by teams of 32 invocations (a workgroup per treelet), the others one
+    /// treelet per invocation; 0 never uses teams, u32::MAX uses them for every dispatched level
+    /// or wave. None: `DEFAULT_TEAM_BELOW` (never).
     pub team_below: Option<u32>,
     /// The same for the climb's waves (those of the overlapped rounds too), which the workgroup's
     /// four teams take a treelet each at a time: waves of fewer treelets than this and than 32.
@@ -229,8 +233,8 @@ pub struct RoundSchedule {
     /// `WorkingTree::optimize_overlapped`), each round starting on a root once it and its
     /// ancestors within the reach are done in the round before; at least `overlap_reach` of the
     /// treelet size (a build refuses less); None: the rounds one after another. The level
-    /// dispatches (above) times the rounds are the waves dispatched, the climb takes the rest;
-    /// only the climb's waves have teams (`climb_team_below`).
+    /// dispatches (above) times the rounds are the waves dispatched (teams by `team_below`), the
+    /// climb takes the rest (teams by `climb_team_below`).
     pub overlap: Option<u32>,
     /// Treelet levels 1 ..= K of each round optimized per subtree (`subtrees_optimize`), K at
     /// most `MAX_SUBTREE_LEVELS`: one dispatch, each workgroup taking a few of the subtrees whose

@@ -21,7 +21,7 @@ kernel!(pub WAVES_FIND: RoundParams = "waves_find"::"main", [32, 1, 1],
     [Read, Read, Read, Read, ReadWrite, ReadWrite, ReadWrite, ReadWrite]);
 kernel!(pub WAVES_OPTIMIZE: RoundParams = "waves_optimize"::"main", [32, 1, 1],
     [ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite,
-     ReadWrite]);
+     ReadWrite, Read]);
 kernel!(pub WAVES_CLIMB: RoundParams = "waves_climb"::"main", [128, 1, 1],
     [ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite,
      Read]);
@@ -79,6 +79,9 @@ pub(crate) struct Overlap {
     pub dispatched: u32,
     pub dp: TreeletDp,
     pub climb_dp: TreeletDp,
+    /// Dispatched waves of fewer treelets than this are optimized by teams, a workgroup per
+    /// treelet.
+    pub team_below: u32,
     /// Climbed waves of fewer treelets than this (and than 32) are optimized by teams.
     pub climb_team_below: u32,
 }
@@ -128,8 +131,7 @@ impl OverlappedRounds {
 
     /// Records the rounds over a working tree of `n` leaves (capacity) whose first schedule
     /// (`TreeletRounds::record_levels` of the first round, with its roots in `roots`) was
-    /// recorded before; `subsets` is `subsets_by_size`, for the climb's teams. Call `reserve`
-    /// first.
+    /// recorded before; `subsets` is `subsets_by_size`, for the teams. Call `reserve` first.
     pub fn record(
         &self,
         rec: &mut Recorder<'_>,
@@ -181,7 +183,7 @@ impl OverlappedRounds {
             &b.state,
         ];
         let mut optimize_buffers = climb_buffers.to_vec();
-        optimize_buffers.push(&b.find_args);
+        optimize_buffers.extend([&b.find_args, subsets]);
         let mut climb_buffers = climb_buffers.to_vec();
         climb_buffers.push(subsets);
         let find = self.find.get_or_init(|| Kernel::new(ctx, &WAVES_FIND));
