@@ -41,6 +41,8 @@ fn main(
     if rounds_stopped(lid) {
         return;
     }
+    // Between two state_word calls (their shared word).
+    workgroupBarrier();
     let treelets = state_word(lid, OPS_COUNT);
     let group = wid.x + wid.y * nwg.x;
     if treelets < params.team_below {
