@@ -91,6 +91,17 @@ pub struct RoundParams {
 const _: () = assert!(std::mem::size_of::<RoundParams>() == 80);
 
 impl RoundParams {
+    /// The round's parameters for its climb, which starts at level `level` (its roots' slots
+    /// from `level_first`) and takes the climb's team threshold.
+    fn for_climb(self, level: u32, level_first: u32, schedule: &RoundSchedule) -> Self {
+        Self {
+            level,
+            level_first,
+            team_below: schedule.climb_team_below(),
+            ..self
+        }
+    }
+
     /// The parameters of the overlapped rounds' kernels (`waves`) for a tree of `n` leaves:
     /// `overlap`'s rounds (γ_r = treelet size · 2^r) and reach, wave `wave`, and the team
     /// threshold of a dispatched wave, or the climb's past them.
@@ -533,9 +544,7 @@ impl TreeletRounds {
             }
         }
         drop(pass);
-        params.level = dispatched + 1;
-        params.level_first = first_slot(dispatched + 1);
-        params.team_below = self.schedule.climb_team_below();
+        let params = params.for_climb(dispatched + 1, first_slot(dispatched + 1), &self.schedule);
         let mut climb_buffers = treelet_buffers.to_vec();
         climb_buffers.extend([state.levels, state.arrivals, state.waves]);
         let climb = self
@@ -633,8 +642,10 @@ mod tests {
     use rand::{Rng, SeedableRng};
     use rand_pcg::Pcg64;
 
-    use super::{level_start, RoundSchedule};
+    use super::{level_start, RoundParams, RoundSchedule};
     use crate::bvh::lbvh::{build_lbvh_from_boxes_cpu, TRBVH_KEY_BITS};
+    use crate::bvh::treelet::waves::Overlap;
+    use crate::bvh::treelet::TreeletDp;
     use crate::bvh::treelet::{optimize_lbvh_cpu, CostModel, TreeletSettings, WorkingTree};
     use crate::bvh::SahParams;
     use crate::geometry::Aabb;
@@ -658,6 +669,39 @@ mod tests {
         assert!(beyond.contains("exceed the most"), "{beyond}");
         let both = with(4, Some(6)).unwrap_err().to_string();
         assert!(both.contains("not both"), "{both}");
+    }
+
+    /// The overlapped rounds' dispatched waves take the dispatched levels' team threshold, the
+    /// waves past them (the climb's dispatch) the climb's, and so does the climb of the rounds
+    /// one after another: a swap builds the same trees, so only this checks it.
+    #[test]
+    fn each_dispatch_takes_its_team_threshold() {
+        let overlap = Overlap {
+            model: CostModel::from(&SahParams::default()),
+            treelet_size: 7,
+            rounds: 3,
+            reach: 6,
+            dispatched: 12,
+            dp: TreeletDp::Unrolled,
+            climb_dp: TreeletDp::Unrolled,
+            team_below: 1024,
+            climb_team_below: 5,
+        };
+        for wave in [1, 12] {
+            assert_eq!(RoundParams::waves(1000, &overlap, wave).team_below, 1024);
+        }
+        assert_eq!(RoundParams::waves(1000, &overlap, 13).team_below, 5);
+        // The rounds one after another: the climb's dispatch likewise.
+        let schedule = RoundSchedule {
+            team_below: Some(1024),
+            climb_team_below: Some(5),
+            ..RoundSchedule::default()
+        };
+        let climb = RoundParams::waves(1000, &overlap, 1).for_climb(13, 77, &schedule);
+        assert_eq!(
+            (climb.level, climb.level_first, climb.team_below),
+            (13, 77, 5)
+        );
     }
 
     /// Boxes of `n` triangles: uniform, in two far clusters, or all at one point.
