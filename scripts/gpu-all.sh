@@ -1,12 +1,14 @@
 #!/usr/bin/env bash
 # Everything a lent GPU is asked to measure, in one `device` call that fits a short lease, step by
 # step in this order (the trace's correctness and the build's figures first): the test binaries
-# ("tests"), the treelet rounds' lowest levels per subtree at each height beside by level
+# ("tests"), teams of 32 invocations per treelet in the dispatched levels, in the overlapped rounds'
+# dispatched waves and in the climb, each threshold beside none ("teams"; TEAM_SCENES), the
+# treelet rounds' lowest levels per subtree at each height beside by level
 # ("subtrees"), every build with wgpu's indirect validation on and off ("indirect"), the
 # binary-vs-wide table ("layouts"), build scaling with each GPU builder's schedule
 # tuned ("scaling"), the round schedules each fixed beside the default and the tuned one (the
-# DP's forms in the dispatched levels and the climb, the overlapped rounds, the team threshold
-# TEAMS, and levels dispatched where LEVELS is set: "schedules"), the changes of scripts/variants/
+# DP's forms in the dispatched levels and the climb, the overlapped rounds, the team thresholds
+# TEAMS and CLIMB_TEAMS, and levels dispatched where LEVELS is set: "schedules"), the changes of scripts/variants/
 # beside this commit ("variants", when `bash scripts/gpu-variants.sh build` packed them), the wide
 # conversion's level dispatches ("widelevels"), where a treelet level's time goes ("probe", when
 # `bash scripts/gpu-probe.sh build` packed its variants), every dispatch of lbvh timed per sort
@@ -36,7 +38,7 @@ save() { tar -C $res -czf "$final/results.tar.gz" .; }
 step() {
   local name=$1 cap=$2 left
   shift 2
-  case " ${STEPS:-tests subtrees indirect layouts scaling schedules variants widelevels probe profile kernels} " in
+  case " ${STEPS:-tests teams subtrees indirect layouts scaling schedules variants widelevels probe profile kernels} " in
     *" $name "*) ;;
     *) return ;;
   esac
@@ -129,6 +131,20 @@ indirect() {
   done
 }
 export -f indirect
+# Teams (a workgroup of 32 invocations per treelet, `--team-below`) in the dispatched levels, then
+# in the overlapped rounds' dispatched waves, each threshold beside none; then the climb's teams
+# (`--climb-team-below`). The same tree each time (README, "Teams for the small levels").
+teams() {
+  for s in ${TEAM_SCENES:-conference crytek_sponza sibenik field:707}; do
+    timeout 40 $TREELET bench --scene $s --builder trbvh --team-below 0,256,1024,4096 --tune-schedule off \
+      $small >> $res/teams.jsonl
+    timeout 40 $TREELET bench --scene $s --builder trbvh --round-overlap 6 --team-below 0,256,1024,4096 \
+      --tune-schedule off $small >> $res/teams.jsonl
+    timeout 30 $TREELET bench --scene $s --builder trbvh --climb-team-below 0,5,9 --tune-schedule off \
+      $small >> $res/teams.jsonl
+  done
+}
+export -f teams
 export small base work
 tests() {
   # shellcheck disable=SC2016
@@ -137,6 +153,7 @@ tests() {
 }
 export -f tests
 step tests 150 bash -c tests
+step teams 150 bash -c teams
 step subtrees 120 bash -c subtrees
 step indirect 150 bash -c indirect
 # The trace first: both layouts on every scene (their ray counts must agree), then the variants.
@@ -150,7 +167,8 @@ step scaling 130 bash -c scaling
 # (README, "On an NVIDIA H200, second session", and "Rounds can overlap"). LEVELS adds the sweep
 # of levels dispatched.
 step schedules 120 env SCENES="${SCHEDULE_SCENES:-conference sibenik field:707 field:2000}" \
-  LEVELS="${LEVELS:-}" TEAMS="${TEAMS:-4,16,256}" CLIMBS=" " REPEATS=11 bash scripts/gpu-schedules.sh
+  LEVELS="${LEVELS:-}" TEAMS="${TEAMS:-256,1024,4096}" CLIMB_TEAMS="${CLIMB_TEAMS:-5,9}" CLIMBS=" " \
+  REPEATS=11 bash scripts/gpu-schedules.sh
 if ls .gpu/variant-*.xz > /dev/null 2>&1; then
   step variants 150 env TREELET=$TREELET bash scripts/gpu-variants.sh run
 fi
@@ -185,6 +203,15 @@ for r in rows("subtrees.jsonl"):
     st = r.get("stages_ms") or {}
     print(f"  {os.path.basename(r['scene'])[:14]:14} {r['builder']:11} {r.get('subtree_levels')!s:>2}"
           f" {r.get('subtree_width')!s:>4} {r.get('level_dispatches')!s:>4} {b.get('min', 0):7.2f} {r['build_ms']:7.2f} {b.get('max', 0):7.2f}"
+          f" {st.get('treelets') or 0:7.3f} {st.get('treelets climb') or 0:6.3f} {r['dispatches']:4}"
+          f" {r.get('sah') or 0:.4f}")
+print("teams.jsonl: scene, overlap, teams below (levels), (climb), build ms (min/median/max), treelets ms,"
+      " climb ms, dispatches, SAH")
+for r in rows("teams.jsonl"):
+    b = r.get("build_ms_spread") or {}
+    st = r.get("stages_ms") or {}
+    print(f"  {os.path.basename(r['scene'])[:14]:14} {r.get('round_overlap')!s:>4} {r.get('team_below')!s:>5}"
+          f" {r.get('climb_team_below')!s:>3} {b.get('min', 0):7.2f} {r['build_ms']:7.2f} {b.get('max', 0):7.2f}"
           f" {st.get('treelets') or 0:7.3f} {st.get('treelets climb') or 0:6.3f} {r['dispatches']:4}"
           f" {r.get('sah') or 0:.4f}")
 print("indirect.jsonl: scene, builder, layout, indirect validation, turn, build ms (min/median/max), wide ms,"
