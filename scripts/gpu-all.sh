@@ -196,24 +196,21 @@ res = sys.argv[1]
 def rows(name):
     p = os.path.join(res, name)
     return [json.loads(l) for l in open(p) if l.startswith("{")] if os.path.exists(p) else []
-print("subtrees.jsonl: scene, builder, subtree levels, width, level dispatches asked, build ms (min/median/max),"
-      " treelets ms, climb ms, dispatches, SAH")
-for r in rows("subtrees.jsonl"):
-    b = r.get("build_ms_spread") or {}
-    st = r.get("stages_ms") or {}
-    print(f"  {os.path.basename(r['scene'])[:14]:14} {r['builder']:11} {r.get('subtree_levels')!s:>2}"
-          f" {r.get('subtree_width')!s:>4} {r.get('level_dispatches')!s:>4} {b.get('min', 0):7.2f} {r['build_ms']:7.2f} {b.get('max', 0):7.2f}"
-          f" {st.get('treelets') or 0:7.3f} {st.get('treelets climb') or 0:6.3f} {r['dispatches']:4}"
-          f" {r.get('sah') or 0:.4f}")
-print("teams.jsonl: scene, overlap, teams below (levels), (climb), build ms (min/median/max), treelets ms,"
-      " climb ms, dispatches, SAH")
-for r in rows("teams.jsonl"):
-    b = r.get("build_ms_spread") or {}
-    st = r.get("stages_ms") or {}
-    print(f"  {os.path.basename(r['scene'])[:14]:14} {r.get('round_overlap')!s:>4} {r.get('team_below')!s:>5}"
-          f" {r.get('climb_team_below')!s:>3} {b.get('min', 0):7.2f} {r['build_ms']:7.2f} {b.get('max', 0):7.2f}"
-          f" {st.get('treelets') or 0:7.3f} {st.get('treelets climb') or 0:6.3f} {r['dispatches']:4}"
-          f" {r.get('sah') or 0:.4f}")
+def round_rows(name, title, columns):
+    """A table of treelet builds: scene, the JSON fields `columns` (key, width), build ms
+    (min/median/max), the treelet stages, dispatches and SAH."""
+    print(f"{name}: scene, {title}, build ms (min/median/max), treelets ms, climb ms, dispatches, SAH")
+    for r in rows(name):
+        b = r.get("build_ms_spread") or {}
+        st = r.get("stages_ms") or {}
+        cells = " ".join(f"{r.get(key)!s:>{width}}" for key, width in columns)
+        print(f"  {os.path.basename(r['scene'])[:14]:14} {cells} {b.get('min', 0):7.2f} {r['build_ms']:7.2f}"
+              f" {b.get('max', 0):7.2f} {st.get('treelets') or 0:7.3f} {st.get('treelets climb') or 0:6.3f}"
+              f" {r['dispatches']:4} {r.get('sah') or 0:.4f}")
+round_rows("subtrees.jsonl", "builder, subtree levels, width, level dispatches asked",
+           [("builder", 11), ("subtree_levels", 2), ("subtree_width", 4), ("level_dispatches", 4)])
+round_rows("teams.jsonl", "overlap, teams below (levels), (climb)",
+           [("round_overlap", 4), ("team_below", 5), ("climb_team_below", 3)])
 print("indirect.jsonl: scene, builder, layout, indirect validation, turn, build ms (min/median/max), wide ms,"
       " dispatches, SAH")
 for r in rows("indirect.jsonl"):
