@@ -60,7 +60,8 @@ fn main(
         }
     }
     if last_workgroup(lid, nwg.x * nwg.y, OPTIMIZE_TICKET) && lid == 0u {
-        let args = wave_args(atomicLoad(&wave_state[CANDIDATE_COUNT + ((wave + 1u) & 1u)]), WAVE_WORKGROUP);
+        let candidates = atomicLoad(&wave_state[CANDIDATE_COUNT + ((wave + 1u) & 1u)]);
+        let args = wave_args(candidates, WAVE_WORKGROUP);
         find_args[0] = args.x;
         find_args[1] = args.y;
         find_args[2] = args.z;

@@ -27,8 +27,9 @@ struct RoundParams {
     // the round before computed them), so nodes_level only counts the roots per level.
     levels_only: u32,
     // A level of fewer treelets is optimized by teams of invocations, a treelet per team: the
-    // dispatched levels' threshold in nodes_level.wgsl and treelets_optimize.wgsl, the climb's
-    // in treelets_climb.wgsl and waves_climb.wgsl (`RoundSchedule::climb_team_below`).
+    // dispatched levels' (or waves') threshold in nodes_level.wgsl, treelets_optimize.wgsl,
+    // waves_find.wgsl and waves_optimize.wgsl, the climb's in treelets_climb.wgsl and
+    // waves_climb.wgsl (`RoundSchedule::climb_team_below`).
     team_below: u32,
     // gamma of the next round (0xffffffff: none), whose levels the treelet kernels compute.
     next_gamma: u32,
