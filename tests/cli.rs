@@ -309,6 +309,44 @@ fn bench_subtree_levels_reports_each_height() {
     }
 }
 
+/// `bench --last-round-size 5,7` builds trbvh once per last round's treelet size, reported in
+/// `last_round_size` (the treelet size where not given) and in no other builder's record; both
+/// trees are valid, and the cheaper last round's SAH is within 1 % of the rounds of one size. A
+/// size out of range, or with overlapped rounds, is refused.
+#[test]
+fn bench_last_round_size_reports_each_size() {
+    let records = quick_bench("lbvh,trbvh", &["--last-round-size", "5,7"]);
+    let sizes: Vec<_> = records
+        .iter()
+        .map(|r| r["last_round_size"].as_u64())
+        .collect();
+    assert_eq!(sizes, [None, Some(5), Some(7)]);
+    for record in &records {
+        assert_eq!(record["valid"], true);
+    }
+    let (cheaper, uniform) = (
+        records[1]["sah"].as_f64().unwrap(),
+        records[2]["sah"].as_f64().unwrap(),
+    );
+    assert!(
+        (cheaper / uniform - 1.0).abs() < 0.01,
+        "{cheaper} against {uniform}"
+    );
+    let bench = ["bench", "--scene", "cornell", "--builder", "trbvh"];
+    assert_clean_failure(
+        &[&bench[..], &["--last-round-size", "9"]].concat(),
+        "last round's treelet size must be 3..=8, got 9",
+    );
+    assert_clean_failure(
+        &[
+            &bench[..],
+            &["--last-round-size", "5", "--round-overlap", "6"],
+        ]
+        .concat(),
+        "the overlapped treelet rounds take one treelet size",
+    );
+}
+
 /// `bench --round-overlap none,6,7` measures trbvh with the rounds one after another and
 /// overlapped at each reach, reports the reach (null for none), and builds the same tree at
 /// reaches 6 and 7 (the scene's overlapped rounds give the sequential tree); a reach below the
@@ -698,7 +736,7 @@ fn overflowing_triangles_are_reported_as_such() {
 
 #[test]
 fn options_of_other_builders_are_refused() {
-    let cases: [(&[&str], &str); 13] = [
+    let cases: [(&[&str], &str); 14] = [
         (
             &["render", "--builder", "sweep", "--treelet-size", "99"],
             "--treelet-size does not apply to builder sweep",
@@ -714,6 +752,10 @@ fn options_of_other_builders_are_refused() {
         (
             &["bench", "--builder", "lbvh", "--team-below", "64"],
             "--team-below does not apply to builder lbvh: only trbvh and trbvh-split have treelets",
+        ),
+        (
+            &["bench", "--builder", "lbvh", "--last-round-size", "5"],
+            "--last-round-size does not apply to builder lbvh",
         ),
         (
             &["bench", "--builder", "sbvh", "--climb-team-below", "8"],

@@ -127,6 +127,7 @@ fn dp_equals_brute_force_on_gpu() {
                     treelet_size: m,
                     rounds: 1,
                     split_percent: 0,
+                    last_round_size: None,
                 };
                 builder.sah = SahParams {
                     max_leaf_size,
@@ -390,6 +391,19 @@ fn gpu_optimizer_equals_cpu_twin() {
         random_soup(2000, 42),
         TreeletSettings::HIGH_QUALITY,
     );
+    // A cheaper last round: its treelets of 5 leaves (3 in a single round of γ = 7), compiled
+    // beside the other rounds' 7.
+    for (rounds, last) in [(3, 5), (1, 3)] {
+        check_gpu_against_cpu(
+            builder,
+            random_soup(2500, 44),
+            TreeletSettings {
+                rounds,
+                last_round_size: Some(last),
+                ..TreeletSettings::BALANCED
+            },
+        );
+    }
     check_gpu_against_cpu_with(
         builder,
         random_soup(1500, 43),
@@ -397,12 +411,38 @@ fn gpu_optimizer_equals_cpu_twin() {
             treelet_size: 7,
             rounds: 0,
             split_percent: 0,
+            last_round_size: None,
         },
         SahParams {
             max_leaf_size: 4,
             ..SahParams::default()
         },
     );
+}
+
+/// A cheaper last round (`TreeletSettings::last_round_size`) runs its own treelets on the GPU:
+/// from the same LBVH its tree is not the rounds of one size's (the agreement checks of
+/// `gpu_optimizer_equals_cpu_twin` tolerate near-ties, so they alone would pass a GPU that
+/// ignored the last round's size), and the whole build's SAH stays within 1 % of theirs.
+#[test]
+fn a_cheaper_last_round_builds_its_own_tree() {
+    let builder =
+        &mut TrbvhBuilder::new(gpu(), TreeletSettings::BALANCED, SahParams::default()).unwrap();
+    let geometry = Geometry::upload(gpu(), &scene_of(random_soup(2500, 44))).unwrap();
+    let uniform = builder.build_stages(gpu(), &geometry).unwrap();
+    builder.settings = TreeletSettings {
+        last_round_size: Some(5),
+        ..TreeletSettings::BALANCED
+    };
+    let cheaper = builder.build_stages(gpu(), &geometry).unwrap();
+    assert!(cheaper.lbvh == uniform.lbvh, "the same LBVH");
+    assert!(
+        cheaper.working != uniform.working,
+        "the last round's treelets of 5 leaves built the tree of treelets of 7"
+    );
+    let sah = SahParams::default();
+    let (a, b) = (sah_cost(&uniform.bvh, &sah), sah_cost(&cheaper.bvh, &sah));
+    assert!((b / a - 1.0).abs() < 0.01, "SAH {a} -> {b}");
 }
 
 /// Each round's schedule (how many levels get a dispatch of their own, the rest being climbed by
@@ -454,6 +494,7 @@ fn subtrees_build_the_tree_of_the_levels_one_by_one() {
                 treelet_size: 3,
                 rounds: 2,
                 split_percent: 0,
+                last_round_size: None,
             },
         ),
     ];
@@ -541,6 +582,7 @@ fn teams_lone_invocations_and_dp_forms_build_the_same_tree() {
             treelet_size,
             rounds: 2,
             split_percent: 0,
+            last_round_size: None,
         };
         builder.settings = settings;
         for levels in [None, Some(0)] {
@@ -970,6 +1012,17 @@ fn bad_settings_are_errors() {
             rounds: 17,
             ..TreeletSettings::BALANCED
         },
+        TreeletSettings {
+            last_round_size: Some(9),
+            ..TreeletSettings::BALANCED
+        },
+        // One round of γ = 3: a root may hold 3 leaves, fewer than the last round's treelets.
+        TreeletSettings {
+            treelet_size: 3,
+            rounds: 1,
+            split_percent: 0,
+            last_round_size: Some(4),
+        },
     ] {
         assert!(
             TrbvhBuilder::new(gpu(), settings, sah).is_err(),
@@ -986,4 +1039,20 @@ fn bad_settings_are_errors() {
             "max leaf {max_leaf_size} accepted"
         );
     }
+    // The overlapped rounds take one treelet size: a cheaper last round with them is refused.
+    let cheaper_last = TreeletSettings {
+        last_round_size: Some(5),
+        ..TreeletSettings::BALANCED
+    };
+    let mut builder = TrbvhBuilder::new(gpu(), cheaper_last, sah).unwrap();
+    builder.set_schedule(RoundSchedule {
+        overlap: Some(6),
+        ..RoundSchedule::default()
+    });
+    let geometry = Geometry::upload(gpu(), &scene_of(random_soup(100, 3))).unwrap();
+    let error = builder
+        .build_stages(gpu(), &geometry)
+        .unwrap_err()
+        .to_string();
+    assert!(error.contains("one treelet size"), "{error}");
 }

@@ -119,14 +119,23 @@ impl Builder {
         }
     }
 
-    /// "trbvh n=7 r=3" style label for reports.
+    /// "trbvh n=7 r=3" style label for reports ("trbvh n=7 r=3 last=5" with a last round of
+    /// other treelets).
     pub fn label(self) -> String {
+        let last = |s: TreeletSettings| {
+            if s.one_treelet_size() {
+                String::new()
+            } else {
+                format!(" last={}", s.round_size(s.rounds as usize - 1))
+            }
+        };
         match self {
-            Builder::Trbvh(s) => format!("trbvh n={} r={}", s.treelet_size, s.rounds),
+            Builder::Trbvh(s) => format!("trbvh n={} r={}{}", s.treelet_size, s.rounds, last(s)),
             Builder::TrbvhSplit(s) => format!(
-                "trbvh-split n={} r={} b={:.2}",
+                "trbvh-split n={} r={}{} b={:.2}",
                 s.treelet_size,
                 s.rounds,
+                last(s),
                 f64::from(s.split_percent) / 100.0
             ),
             other => other.name().to_string(),

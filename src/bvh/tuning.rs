@@ -92,7 +92,8 @@ pub struct TuningSpace {
     /// The rounds' default level dispatches differ (on CPU devices they depend on each round's
     /// γ): `round_levels` is round 1's, and a count equal to it is not the default in effect.
     pub round_levels_vary: bool,
-    /// The reach the overlapped rounds take (`treelet::overlap_reach` of the treelet size).
+    /// The reach the overlapped rounds take (`treelet::overlap_reach` of the treelet size); 0:
+    /// the rounds cannot overlap (their treelets are not all of one size).
     pub overlap_reach: u32,
     /// The device's subtree width (`RoundSchedule::subtree_width` unset).
     pub subtree_width: u32,
@@ -227,6 +228,8 @@ impl Dimension {
         match self {
             Dimension::SortTile => true,
             Dimension::WideLevels => space.wide_levels.is_some(),
+            // Rounds of more than one treelet size cannot overlap.
+            Dimension::Overlap => space.round_levels.is_some() && space.overlap_reach > 0,
             _ => space.round_levels.is_some(),
         }
     }

@@ -261,7 +261,12 @@ impl TreeUpdater {
                     gamma != u32::MAX
                         && RoundSchedule::default_level_dispatches(prims, gamma, device) != levels
                 });
-                (prims, Some(levels), vary, overlap_reach(size))
+                let reach = if b.settings.one_treelet_size() {
+                    overlap_reach(size)
+                } else {
+                    0
+                };
+                (prims, Some(levels), vary, reach)
             }
             _ => (triangles, None, false, 0),
         };

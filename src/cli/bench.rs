@@ -304,6 +304,8 @@ struct BenchRecord {
     layout: &'static str,
     treelet_size: Option<u32>,
     rounds: Option<u32>,
+    /// Treelet builders with rounds: the last round's treelet size in effect.
+    last_round_size: Option<u32>,
     split_budget: Option<f64>,
     /// Treelet builders: the levels per round given a dispatch (null: from the tree's size, per
     /// round) and the team thresholds in effect in the dispatched levels and in the climb.
@@ -624,6 +626,10 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
             layout: layout.name(),
             treelet_size: builder.treelet_settings().map(|s| s.treelet_size),
             rounds: builder.treelet_settings().map(|s| s.rounds),
+            last_round_size: builder
+                .treelet_settings()
+                .filter(|s| s.rounds > 0)
+                .map(|s| s.round_size(s.rounds as usize - 1)),
             split_budget: builder
                 .treelet_settings()
                 .map(|s| f64::from(s.split_percent) / 100.0),

@@ -76,6 +76,10 @@ pub struct TraceArgs {
     /// Restructuring rounds for trbvh, overriding the preset; `bench` takes a comma-separated list
     #[arg(long, value_delimiter = ',')]
     rounds: Vec<u32>,
+    /// Leaves per treelet (3..=8) of the last round of trbvh, a cheaper last round (default: the
+    /// treelet size; not with --round-overlap); `bench` takes a comma-separated list
+    #[arg(long, value_delimiter = ',')]
+    last_round_size: Vec<u32>,
     /// Pre-splitting budget β of trbvh-split (extra references per triangle, 0..=1; default 0.3);
     /// `bench` takes a comma-separated list
     #[arg(long, value_delimiter = ',', value_parser = parse_split_budget)]
@@ -93,7 +97,8 @@ pub struct TraceArgs {
 }
 
 impl TraceArgs {
-    /// Every combination of the requested treelet sizes and rounds (the preset's where not given).
+    /// Every combination of the requested treelet sizes, rounds and last rounds' sizes (the
+    /// preset's where not given).
     fn treelet_variants(&self) -> Vec<TreeletSettings> {
         let preset = self.preset.unwrap_or(TreeletSettings::BALANCED);
         let sizes = if self.treelet_size.is_empty() {
@@ -106,16 +111,25 @@ impl TraceArgs {
         } else {
             self.rounds.clone()
         };
-        sizes
-            .iter()
-            .flat_map(|&treelet_size| {
-                rounds.iter().map(move |&rounds| TreeletSettings {
-                    treelet_size,
-                    rounds,
-                    split_percent: 0,
-                })
-            })
-            .collect()
+        let last_sizes: Vec<Option<u32>> = if self.last_round_size.is_empty() {
+            vec![None]
+        } else {
+            self.last_round_size.iter().copied().map(Some).collect()
+        };
+        let mut variants = Vec::new();
+        for &treelet_size in &sizes {
+            for &rounds in &rounds {
+                for &last_round_size in &last_sizes {
+                    variants.push(TreeletSettings {
+                        treelet_size,
+                        rounds,
+                        split_percent: 0,
+                        last_round_size,
+                    });
+                }
+            }
+        }
+        variants
     }
 
     /// Fails when a treelet option is given but no builder in `builders` has treelets, or a split
@@ -126,6 +140,7 @@ impl TraceArgs {
             &[
                 ("--treelet-size", !self.treelet_size.is_empty()),
                 ("--rounds", !self.rounds.is_empty()),
+                ("--last-round-size", !self.last_round_size.is_empty()),
                 ("--preset", self.preset.is_some()),
             ],
         )?;

@@ -50,6 +50,7 @@ fn variants(builder: Builder, quick: bool) -> Vec<Builder> {
                     treelet_size,
                     rounds,
                     split_percent: 0,
+                    last_round_size: None,
                 })
             })
         })

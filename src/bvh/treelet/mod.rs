@@ -69,6 +69,11 @@ pub struct TreeletSettings {
     /// Triangle pre-splitting budget β in percent of the triangle count (0 disables; §5 of the
     /// paper, which uses 30).
     pub split_percent: u32,
+    /// Leaves per treelet of the last round, where it takes smaller (cheaper) treelets than the
+    /// others, 3..=8, with the same γ; None: `treelet_size`. Not from the paper: its DP is the
+    /// round's cost (966 partition tests for 7 leaves, 90 for 5), and the last round improves
+    /// the tree least (README, "A cheaper last round").
+    pub last_round_size: Option<u32>,
 }
 
 impl TreeletSettings {
@@ -77,19 +82,35 @@ impl TreeletSettings {
         treelet_size: 5,
         rounds: 1,
         split_percent: 0,
+        last_round_size: None,
     };
     /// The paper's reference setting: treelets of 7 leaves, 3 rounds.
     pub const BALANCED: Self = Self {
         treelet_size: 7,
         rounds: 3,
         split_percent: 0,
+        last_round_size: None,
     };
     /// Largest treelets the kernel supports, more rounds.
     pub const HIGH_QUALITY: Self = Self {
         treelet_size: 8,
         rounds: 4,
         split_percent: 0,
+        last_round_size: None,
     };
+
+    /// Leaves per treelet of round `round` (from 0).
+    pub fn round_size(&self, round: usize) -> u32 {
+        match self.last_round_size {
+            Some(size) if round + 1 == self.rounds as usize => size,
+            _ => self.treelet_size,
+        }
+    }
+
+    /// Whether every round takes treelets of one size (the overlapped rounds need it).
+    pub fn one_treelet_size(&self) -> bool {
+        self.rounds == 0 || self.round_size(self.rounds as usize - 1) == self.treelet_size
+    }
 
     /// A preset by name: `fast`, `balanced` or `high`.
     pub fn preset(name: &str) -> Result<Self> {
@@ -110,6 +131,23 @@ impl TreeletSettings {
                 "treelet size must be {MIN_TREELET_SIZE}..={MAX_TREELET_SIZE}, got {}",
                 self.treelet_size
             )));
+        }
+        if let Some(size) = self.last_round_size {
+            if !(MIN_TREELET_SIZE..=MAX_TREELET_SIZE).contains(&size) {
+                return Err(Error::InvalidArgument(format!(
+                    "last round's treelet size must be {MIN_TREELET_SIZE}..={MAX_TREELET_SIZE}, \
+                     got {size}"
+                )));
+            }
+            // A root holds at least γ leaves, and its treelet takes `size` of them.
+            let last_gamma = self.gammas().last().copied().unwrap_or(u32::MAX);
+            if self.rounds > 0 && last_gamma < size {
+                return Err(Error::InvalidArgument(format!(
+                    "the last round's treelets of {size} leaves need γ ≥ {size}, but its γ is \
+                     {last_gamma} (treelet size {} doubled each round)",
+                    self.treelet_size
+                )));
+            }
         }
         if !(1..=MAX_GPU_LEAF_SIZE).contains(&sah.max_leaf_size) {
             return Err(Error::InvalidArgument(format!(
@@ -197,8 +235,8 @@ pub fn optimize_lbvh_cpu(
     settings: &TreeletSettings,
     model: &CostModel,
 ) -> WorkingTree {
-    for gamma in settings.gammas() {
-        tree.optimize_round(model, settings.treelet_size, gamma);
+    for (round, gamma) in settings.gammas().into_iter().enumerate() {
+        tree.optimize_round(model, settings.round_size(round), gamma);
     }
     tree
 }
@@ -415,6 +453,13 @@ impl TrbvhBuilder {
     ) -> Result<()> {
         self.settings.validate(&self.sah)?;
         self.rounds.schedule.check(self.settings.treelet_size)?;
+        if self.rounds.schedule.overlap.is_some() && !self.settings.one_treelet_size() {
+            return Err(Error::InvalidArgument(
+                "the overlapped treelet rounds take one treelet size (a wave runs the treelets of \
+                 several rounds in one dispatch): drop the last round's size or the overlap"
+                    .into(),
+            ));
+        }
         let ctx = rec.ctx;
         let budget = split_budget(geometry.triangle_count, self.settings.split_percent);
         // The leaves: the triangles, or the references of pre-splitting (counted on the GPU).
@@ -490,9 +535,10 @@ impl TrbvhBuilder {
         };
         let model = CostModel::from(&self.sah);
         let treelet_size = self.settings.treelet_size;
+        let settings = self.settings;
         let round = |r: usize| Round {
             model,
-            treelet_size,
+            treelet_size: settings.round_size(r),
             gamma: gammas[r],
             next_gamma: gammas.get(r + 1).copied().unwrap_or(u32::MAX),
             levels_only: r > 0,

@@ -736,6 +736,7 @@ mod tests {
                     treelet_size: 7,
                     rounds,
                     split_percent: 0,
+                    last_round_size: None,
                 };
                 let tree = optimize_lbvh_cpu(lbvh.clone(), &settings, &model);
                 for gamma in [3u32, 5, 7, 14, 28, 56] {
