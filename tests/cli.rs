@@ -290,17 +290,11 @@ fn default_subtree_width(record: &serde_json::Value) -> u64 {
 #[test]
 fn bench_subtree_levels_reports_each_height() {
     let records = quick_bench("trbvh", &["--subtree-levels", "0,4,8"]);
-    let heights: Vec<_> = records
-        .iter()
-        .map(|r| r["subtree_levels"].as_u64())
-        .collect();
+    let heights = u64_values(&records, "subtree_levels");
     assert_eq!(heights, [Some(0), Some(4), Some(8)]);
     // The width in effect with subtrees: the device type's default.
     let width = default_subtree_width(&records[0]);
-    let widths: Vec<_> = records
-        .iter()
-        .map(|r| r["subtree_width"].as_u64())
-        .collect();
+    let widths = u64_values(&records, "subtree_width");
     assert_eq!(widths, [None, Some(width), Some(width)]);
     for record in &records {
         assert_eq!(record["valid"], true);
@@ -316,14 +310,11 @@ fn bench_subtree_levels_reports_each_height() {
 #[test]
 fn bench_last_round_size_reports_each_size() {
     let records = quick_bench("lbvh,trbvh", &["--last-round-size", "5,7"]);
-    let sizes: Vec<_> = records
-        .iter()
-        .map(|r| r["last_round_size"].as_u64())
-        .collect();
-    assert_eq!(sizes, [None, Some(5), Some(7)]);
-    for record in &records {
-        assert_eq!(record["valid"], true);
-    }
+    assert_eq!(
+        u64_values(&records, "last_round_size"),
+        [None, Some(5), Some(7)]
+    );
+    assert!(records.iter().all(|r| r["valid"] == true), "{records:?}");
     let (cheaper, uniform) = (
         records[1]["sah"].as_f64().unwrap(),
         records[2]["sah"].as_f64().unwrap(),
@@ -332,19 +323,25 @@ fn bench_last_round_size_reports_each_size() {
         (cheaper / uniform - 1.0).abs() < 0.01,
         "{cheaper} against {uniform}"
     );
-    let bench = ["bench", "--scene", "cornell", "--builder", "trbvh"];
-    assert_clean_failure(
-        &[&bench[..], &["--last-round-size", "9"]].concat(),
+    assert_trbvh_bench_refuses(
+        &["--last-round-size", "9"],
         "last round's treelet size must be 3..=8, got 9",
     );
-    assert_clean_failure(
-        &[
-            &bench[..],
-            &["--last-round-size", "5", "--round-overlap", "6"],
-        ]
-        .concat(),
+    assert_trbvh_bench_refuses(
+        &["--last-round-size", "5", "--round-overlap", "6"],
         "the overlapped treelet rounds take one treelet size",
     );
+}
+
+/// Field `key` of each record, where it is a number.
+fn u64_values(records: &[serde_json::Value], key: &str) -> Vec<Option<u64>> {
+    records.iter().map(|r| r[key].as_u64()).collect()
+}
+
+/// `bench` of trbvh on the Cornell box with `extra` fails cleanly with `message`.
+fn assert_trbvh_bench_refuses(extra: &[&str], message: &str) {
+    let bench = ["bench", "--scene", "cornell", "--builder", "trbvh"];
+    assert_clean_failure(&[&bench[..], extra].concat(), message);
 }
 
 /// `bench --round-overlap none,6,7` measures trbvh with the rounds one after another and
@@ -354,10 +351,7 @@ fn bench_last_round_size_reports_each_size() {
 #[test]
 fn bench_round_overlap_reports_each_reach() {
     let records = quick_bench("trbvh", &["--round-overlap", "none,6,7"]);
-    let reaches: Vec<_> = records
-        .iter()
-        .map(|r| r["round_overlap"].as_u64())
-        .collect();
+    let reaches = u64_values(&records, "round_overlap");
     assert_eq!(reaches, [None, Some(6), Some(7)]);
     for record in &records {
         assert_eq!(record["valid"], true);
@@ -367,18 +361,13 @@ fn bench_round_overlap_reports_each_reach() {
         assert_eq!(record["nodes"], records[0]["nodes"]);
     }
     // Below treelet size − 1 two treelets of a wave could share nodes: refused.
-    let bench = ["bench", "--scene", "cornell", "--builder", "trbvh"];
-    assert_clean_failure(
-        &[&bench[..], &["--round-overlap", "5"]].concat(),
+    assert_trbvh_bench_refuses(
+        &["--round-overlap", "5"],
         "round overlap reach of 5 is below 6, the least for treelets of 7 leaves",
     );
     // Overlapped rounds find their own waves: not with subtrees.
-    assert_clean_failure(
-        &[
-            &bench[..],
-            &["--round-overlap", "6", "--subtree-levels", "4"],
-        ]
-        .concat(),
+    assert_trbvh_bench_refuses(
+        &["--round-overlap", "6", "--subtree-levels", "4"],
         "either overlap or take subtrees, not both",
     );
 }
@@ -473,10 +462,7 @@ fn bench_wide_level_dispatches_convert_the_same_tree() {
         "trbvh",
         &["--layout", "wide", "--wide-level-dispatches", "0,3,32"],
     );
-    let asked: Vec<_> = records
-        .iter()
-        .map(|r| r["wide_level_dispatches"].as_u64())
-        .collect();
+    let asked = u64_values(&records, "wide_level_dispatches");
     assert_eq!(asked, [Some(0), Some(3), Some(32)]);
     let dispatches: Vec<_> = records
         .iter()
