@@ -122,12 +122,9 @@ impl Builder {
     /// "trbvh n=7 r=3" style label for reports ("trbvh n=7 r=3 last=5" with a last round of
     /// other treelets).
     pub fn label(self) -> String {
-        let last = |s: TreeletSettings| {
-            if s.one_treelet_size() {
-                String::new()
-            } else {
-                format!(" last={}", s.round_size(s.rounds as usize - 1))
-            }
+        let last = |s: TreeletSettings| match s.last_round_treelets() {
+            Some(size) if !s.one_treelet_size() => format!(" last={size}"),
+            _ => String::new(),
         };
         match self {
             Builder::Trbvh(s) => format!("trbvh n={} r={}{}", s.treelet_size, s.rounds, last(s)),

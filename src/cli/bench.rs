@@ -27,7 +27,9 @@ use treelet::sort::check_tile_items;
 use treelet::trace::{PathTracer, TraceStats};
 use treelet::Result;
 
-use super::{builder_names, parse_builder, refuse_treelet_options, TraceArgs, TuneSchedule};
+use super::{
+    builder_names, or_default, parse_builder, refuse_treelet_options, TraceArgs, TuneSchedule,
+};
 
 #[derive(Args, Debug)]
 pub struct BenchArgs {
@@ -274,15 +276,6 @@ fn pairs<T: Copy>(a: &[T], b: &[T]) -> Vec<(T, T)> {
     a.iter()
         .flat_map(|&x| b.iter().map(move |&y| (x, y)))
         .collect()
-}
-
-/// The values of a list option, or the default (None) where none is given.
-fn or_default<T: Copy>(values: &[T]) -> Vec<Option<T>> {
-    if values.is_empty() {
-        vec![None]
-    } else {
-        values.iter().copied().map(Some).collect()
-    }
 }
 
 fn parse_warmup_ms(s: &str) -> std::result::Result<f64, String> {
@@ -628,8 +621,7 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
             rounds: builder.treelet_settings().map(|s| s.rounds),
             last_round_size: builder
                 .treelet_settings()
-                .filter(|s| s.rounds > 0)
-                .map(|s| s.round_size(s.rounds as usize - 1)),
+                .and_then(|s| s.last_round_treelets()),
             split_budget: builder
                 .treelet_settings()
                 .map(|s| f64::from(s.split_percent) / 100.0),

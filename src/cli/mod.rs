@@ -96,35 +96,29 @@ pub struct TraceArgs {
     wide_collapse: Vec<WideCollapse>,
 }
 
+/// The values of a list option, or the default (None) where none is given.
+fn or_default<T: Copy>(values: &[T]) -> Vec<Option<T>> {
+    if values.is_empty() {
+        vec![None]
+    } else {
+        values.iter().copied().map(Some).collect()
+    }
+}
+
 impl TraceArgs {
     /// Every combination of the requested treelet sizes, rounds and last rounds' sizes (the
     /// preset's where not given).
     fn treelet_variants(&self) -> Vec<TreeletSettings> {
         let preset = self.preset.unwrap_or(TreeletSettings::BALANCED);
-        let sizes = if self.treelet_size.is_empty() {
-            vec![preset.treelet_size]
-        } else {
-            self.treelet_size.clone()
-        };
-        let rounds = if self.rounds.is_empty() {
-            vec![preset.rounds]
-        } else {
-            self.rounds.clone()
-        };
-        let last_sizes: Vec<Option<u32>> = if self.last_round_size.is_empty() {
-            vec![None]
-        } else {
-            self.last_round_size.iter().copied().map(Some).collect()
-        };
         let mut variants = Vec::new();
-        for &treelet_size in &sizes {
-            for &rounds in &rounds {
-                for &last_round_size in &last_sizes {
+        for treelet_size in or_default(&self.treelet_size) {
+            for rounds in or_default(&self.rounds) {
+                for last_round_size in or_default(&self.last_round_size) {
                     variants.push(TreeletSettings {
-                        treelet_size,
-                        rounds,
+                        treelet_size: treelet_size.unwrap_or(preset.treelet_size),
+                        rounds: rounds.unwrap_or(preset.rounds),
                         split_percent: 0,
-                        last_round_size,
+                        last_round_size: last_round_size.or(preset.last_round_size),
                     });
                 }
             }

@@ -107,9 +107,15 @@ impl TreeletSettings {
         }
     }
 
+    /// Leaves per treelet of the last round in effect; None without rounds.
+    pub fn last_round_treelets(&self) -> Option<u32> {
+        (self.rounds > 0).then(|| self.round_size(self.rounds as usize - 1))
+    }
+
     /// Whether every round takes treelets of one size (the overlapped rounds need it).
     pub fn one_treelet_size(&self) -> bool {
-        self.rounds == 0 || self.round_size(self.rounds as usize - 1) == self.treelet_size
+        self.last_round_treelets()
+            .is_none_or(|size| size == self.treelet_size)
     }
 
     /// A preset by name: `fast`, `balanced` or `high`.
