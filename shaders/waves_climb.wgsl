@@ -6,23 +6,11 @@
 // optimized by the workgroup's TEAMS teams of 32 invocations, a treelet per team at a time
 // (treelet_team.wgsl), as in treelets_climb.wgsl; a larger one a treelet per invocation. Node
 // data is only shared within the workgroup: storageBarriers order it.
-#include "bvh_node.wgsl"
-#include "treelet_round.wgsl"
 
 const WORKGROUP: u32 = 128u;
 const TEAMS: u32 = 4u;
 
-@group(0) @binding(0) var<uniform> params: RoundParams;
-@group(0) @binding(1) var<storage, read_write> nodes: array<BvhNode>;
-@group(0) @binding(2) var<storage, read_write> parents: array<u32>;
-@group(0) @binding(3) var<storage, read_write> prim_counts: array<u32>;
-@group(0) @binding(4) var<storage, read_write> costs: array<f32>;
-// Unused by the overlapped rounds (waves_optimize.wgsl).
-@group(0) @binding(5) var<storage, read_write> next_levels: array<u32>;
-@group(0) @binding(6) var<storage, read_write> done: array<u32>;
-@group(0) @binding(7) var<storage, read_write> candidate_waves: array<atomic<u32>>;
-@group(0) @binding(8) var<storage, read_write> lists: array<u32>;
-@group(0) @binding(9) var<storage, read_write> wave_state: array<atomic<u32>>;
+#include "treelet_wave_bindings.wgsl"
 // `treelet::subsets_by_size`, for the teams.
 @group(0) @binding(10) var<storage, read> subset_order: array<u32>;
 

@@ -4,23 +4,10 @@
 // the dispatch accordingly), and the candidates it adds to the next wave. The workgroup that
 // finishes last writes the next wave's find arguments and clears this wave's counts (the
 // candidates its find read, its treelets).
-#include "bvh_node.wgsl"
-#include "treelet_round.wgsl"
 
 const TEAMS: u32 = 1u;
 
-@group(0) @binding(0) var<uniform> params: RoundParams;
-@group(0) @binding(1) var<storage, read_write> nodes: array<BvhNode>;
-@group(0) @binding(2) var<storage, read_write> parents: array<u32>;
-@group(0) @binding(3) var<storage, read_write> prim_counts: array<u32>;
-@group(0) @binding(4) var<storage, read_write> costs: array<f32>;
-// The next round's levels, which the overlapped rounds do not use (params.next_gamma is
-// u32::MAX: treelet_dp.wgsl stores zeros).
-@group(0) @binding(5) var<storage, read_write> next_levels: array<u32>;
-@group(0) @binding(6) var<storage, read_write> done: array<u32>;
-@group(0) @binding(7) var<storage, read_write> candidate_waves: array<atomic<u32>>;
-@group(0) @binding(8) var<storage, read_write> lists: array<u32>;
-@group(0) @binding(9) var<storage, read_write> wave_state: array<atomic<u32>>;
+#include "treelet_wave_bindings.wgsl"
 // The next wave's find dispatch's indirect arguments.
 @group(0) @binding(10) var<storage, read_write> find_args: array<u32>;
 // `treelet::subsets_by_size`, for the teams.

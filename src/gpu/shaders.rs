@@ -85,6 +85,10 @@ const INCLUDES: &[(&str, &str)] = &[
         include_str!("../../shaders/include/treelet_roots.wgsl"),
     ),
     (
+        "treelet_wave_bindings.wgsl",
+        include_str!("../../shaders/include/treelet_wave_bindings.wgsl"),
+    ),
+    (
         "unfused.wgsl",
         include_str!("../../shaders/include/unfused.wgsl"),
     ),
