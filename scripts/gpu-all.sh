@@ -95,11 +95,11 @@ scaling() {
 }
 export -f scaling
 # The wide conversion's level dispatches (the ones past a shallow tree find no work, a deep tree's
-# levels past them go to one workgroup; README, "Level dispatches past the tree").
+# levels past them go to the subtree finish; README, "Level dispatches past the tree").
 wide_levels() {
   for s in conference crytek_sponza lost_empire field:707; do
     timeout 40 $TREELET bench --scene $s --builder trbvh --layout wide \
-      --wide-level-dispatches 6,8,10,12,14,16,20 --tune-schedule off $small >> $res/widelevels.jsonl
+      --wide-level-dispatches 3,6,8,10,12,14,16,20 --tune-schedule off $small >> $res/widelevels.jsonl
   done
 }
 export -f wide_levels

@@ -8,8 +8,8 @@
 // dispatch writes the record of the next: first = end of this level (the children allocated here
 // follow it), end = the largest end of those children, and ceil((end − first) / 64) workgroups
 // (capped; the invocations stride): none once a level allocates no children, so the level
-// dispatches past the tree's depth cost only their launch. Each dispatch raises wide_counters[3]
-// to the end of the nodes it emitted, where wide_nodes_finish.wgsl starts.
+// dispatches past the tree's depth cost only their launch. The record the last dispatch writes
+// sizes wide_nodes_finish.wgsl, which emits the rest of the tree.
 #include "wide_collapse.wgsl"
 
 fn size_next_level(level: u32, first: u32, children_end: u32) {
@@ -50,9 +50,9 @@ fn main(
                 open_next_level(top, end);
             }
             for (var wave = first; wave < end; wave += EMIT_WORKGROUP) {
-                let children_end = emit_wave_node(wave + lid, end, lid);
-                if level == top && children_end > 0u {
-                    size_next_level(top, end, children_end);
+                let children = emit_wave_node(wave + lid, wave + lid < end, lid);
+                if level == top && children.y > 0u {
+                    size_next_level(top, end, children.x + children.y);
                 }
             }
             // This level's sources are stored before the next level reads them.
@@ -64,23 +64,19 @@ fn main(
             first = end;
             end = workgroupUniformLoad(&start_end);
         }
-        if lid == 0u {
-            atomicMax(&wide_counters[3], first);
-        }
         return;
     }
     let first = this_level[record_word(params.level, 3u)];
     let end = max(this_level[record_word(params.level, 4u)], first);
     if gid.x == 0u {
         open_next_level(params.level, end);
-        atomicMax(&wide_counters[3], end);
     }
     // The workgroups stride over the level's nodes a wave at a time.
     let stride = groups.x * EMIT_WORKGROUP;
     for (var wave = first + wid.x * EMIT_WORKGROUP; wave < end; wave += stride) {
-        let children_end = emit_wave_node(wave + lid, end, lid);
-        if children_end > 0u {
-            size_next_level(params.level, end, children_end);
+        let children = emit_wave_node(wave + lid, wave + lid < end, lid);
+        if children.y > 0u {
+            size_next_level(params.level, end, children.x + children.y);
         }
     }
 }

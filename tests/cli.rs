@@ -454,7 +454,7 @@ fn bench_tunes_the_schedule_on_request() {
 }
 
 /// `bench --wide-level-dispatches` converts the same tree with every split of the wide levels
-/// between indirect dispatches and the one-workgroup finish (the root's dispatch and the finish
+/// between indirect dispatches and the subtree finish (the root's dispatch and the finish
 /// always run), reports the count asked for, and is refused without the wide layout.
 #[test]
 fn bench_wide_level_dispatches_convert_the_same_tree() {

@@ -984,9 +984,7 @@ fn the_tuning_space_has_the_builds_defaults() {
         );
         assert_eq!(
             space.wide_levels,
-            Some(treelet::bvh::wide::WideConverter::level_dispatches(
-                leaves, device
-            ))
+            Some(treelet::bvh::wide::WideConverter::level_dispatches(leaves))
         );
     }
     assert_ne!(

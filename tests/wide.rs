@@ -18,7 +18,7 @@ use glam::Vec3;
 use treelet::bvh::treelet::TreeletSettings;
 use treelet::bvh::wide::{
     gather_triangles, max_wide_nodes, validate_wide, validate_wide_with_references, wide_sah_costs,
-    Layout, Slot, WideBvh, WideCollapse, WIDTH,
+    Layout, Slot, WideBvh, WideCollapse, WideConverter, FINISH_POOL, WIDTH,
 };
 use treelet::bvh::{
     build_sweep_sah, read_wide_bvh, validate, write_wide_bvh, Builder, Bvh, BvhNode, SahParams,
@@ -29,6 +29,7 @@ use treelet::geometry::{Aabb, Hit, Ray};
 use treelet::gpu::read_buffer;
 use treelet::scene::{load_scene, Scene, Triangle};
 use treelet::trace::{any_hits_wide, closest_hits, closest_hits_wide, PathTracer, RenderSettings};
+use treelet::Error;
 
 /// The tree as a sequence independent of node and reference-block numbering: each node's frame,
 /// counts and quantized boxes, then per slot its references or its subtree, depth first.
@@ -63,13 +64,28 @@ fn split_builder() -> Builder {
     })
 }
 
-/// Builds `scene` with `builder` and converts it by `collapse` with `level_dispatches` (None: the
-/// default).
+/// How the GPU conversion spreads a tree's levels over its dispatches (None: the defaults).
+#[derive(Clone, Copy, Debug, Default)]
+struct Spread {
+    level_dispatches: Option<u32>,
+    finish_pool: Option<u32>,
+}
+
+impl Spread {
+    fn levels(dispatches: u32) -> Self {
+        Self {
+            level_dispatches: Some(dispatches),
+            ..Self::default()
+        }
+    }
+}
+
+/// Builds `scene` with `builder` and converts it by `collapse`, spread as `spread` says.
 fn build_wide(
     scene: &Scene,
     builder: Builder,
     collapse: WideCollapse,
-    level_dispatches: Option<u32>,
+    spread: Spread,
 ) -> (Geometry, Tree) {
     let geometry = Geometry::upload(gpu(), scene).unwrap();
     let mut tree = Tree::empty(gpu()).unwrap();
@@ -77,7 +93,10 @@ fn build_wide(
         TreeUpdater::new(gpu(), UpdateMode::Rebuild(builder), &SahParams::default()).unwrap();
     updater.set_layout(gpu(), Layout::Wide);
     let converter = updater.converter_mut().unwrap();
-    converter.set_level_dispatches(level_dispatches);
+    converter.set_level_dispatches(spread.level_dispatches);
+    converter
+        .set_finish_pool(gpu(), spread.finish_pool)
+        .unwrap();
     converter.set_collapse(collapse);
     record_update(&mut updater, &geometry, &scene.triangles, &mut tree).unwrap();
     (geometry, tree)
@@ -87,9 +106,9 @@ fn check_conversion(
     scene: &Scene,
     builder: Builder,
     collapse: WideCollapse,
-    level_dispatches: Option<u32>,
+    spread: Spread,
 ) -> WideBvh {
-    let (_, tree) = build_wide(scene, builder, collapse, level_dispatches);
+    let (_, tree) = build_wide(scene, builder, collapse, spread);
     let binary = tree.download(gpu()).unwrap();
     let gpu_wide = tree.wide.as_ref().unwrap().download(gpu()).unwrap();
     let cpu_wide = match collapse {
@@ -98,7 +117,7 @@ fn check_conversion(
     }
     .unwrap();
     let who = format!(
-        "{} on {} ({}, {level_dispatches:?})",
+        "{} on {} ({}, {spread:?})",
         builder.label(),
         scene.name,
         collapse.name()
@@ -152,29 +171,52 @@ fn gpu_conversion_equals_cpu_twin_for_every_builder() {
             Builder::Sweep,
         ] {
             for &collapse in WideCollapse::ALL {
-                check_conversion(scene, builder, collapse, None);
+                check_conversion(scene, builder, collapse, Spread::default());
             }
         }
     }
 }
 
-/// Every split of the levels between indirect dispatches and the one-workgroup finish gives the
-/// same tree: all levels in the finish (0), the root's dispatch alone (1, 2) or followed by
-/// level dispatches (3), and more dispatches than levels.
+/// Every split of the levels between indirect dispatches and the finish gives the same tree: all
+/// levels below the root in the finish (0), the root's dispatch alone (1, 2) or followed by level
+/// dispatches (3), and more dispatches than levels; and so does a finish whose pools of subtree
+/// roots fill (1 and 8 roots, the walks going on with what the pool has no room for). A pool of
+/// no roots, or of more than the finish holds, is refused.
 #[test]
 fn every_level_schedule_gives_the_same_tree() {
     let scene = load_scene("field-10k").unwrap();
     let builder = Builder::Trbvh(TreeletSettings::BALANCED);
+    let spreads =
+        [0, 1, 2, 3, 32]
+            .map(Spread::levels)
+            .into_iter()
+            .chain([(0, 1), (0, 8), (3, 8)].map(|(dispatches, roots)| Spread {
+                finish_pool: Some(roots),
+                ..Spread::levels(dispatches)
+            }));
     for &collapse in WideCollapse::ALL {
-        let reference = canonical(&check_conversion(&scene, builder, collapse, None));
-        for dispatches in [0, 1, 2, 3, 32] {
-            let wide = check_conversion(&scene, builder, collapse, Some(dispatches));
+        let reference = canonical(&check_conversion(
+            &scene,
+            builder,
+            collapse,
+            Spread::default(),
+        ));
+        for spread in spreads.clone() {
+            let wide = check_conversion(&scene, builder, collapse, spread);
             assert!(
                 canonical(&wide) == reference,
-                "{} collapse, {dispatches} level dispatches",
+                "{} collapse, {spread:?}",
                 collapse.name()
             );
         }
+    }
+    let mut converter = WideConverter::new(gpu(), &SahParams::default());
+    for roots in [0, FINISH_POOL + 1] {
+        let refused = converter.set_finish_pool(gpu(), Some(roots));
+        assert!(
+            matches!(refused, Err(Error::InvalidArgument(_))),
+            "{roots} roots: {refused:?}"
+        );
     }
 }
 
@@ -221,7 +263,7 @@ fn wide_hits_equal_brute_force() {
             ),
             (split_builder(), WideCollapse::Optimal),
         ] {
-            let (geometry, tree) = build_wide(scene, builder, collapse, None);
+            let (geometry, tree) = build_wide(scene, builder, collapse, Spread::default());
             let hits = closest_hits_wide(gpu(), &geometry, &tree, &plain).unwrap();
             let ties = assert_hits_match(&scene.triangles, &rays, &hits);
             let binary = closest_hits(gpu(), &geometry, &tree, &plain).unwrap();
@@ -261,7 +303,8 @@ fn optimal_collapse_is_smaller_and_traces_brute_force_hits() {
     .iter()
     .enumerate()
     {
-        let (geometry, mut tree) = build_wide(scene, builder, WideCollapse::Optimal, None);
+        let (geometry, mut tree) =
+            build_wide(scene, builder, WideCollapse::Optimal, Spread::default());
         let bvh = tree.download(gpu()).unwrap();
         let optimal = tree.wide.as_ref().unwrap().download(gpu()).unwrap();
         // The same binary tree, converted greedily (and traced as converted, below).
@@ -375,7 +418,7 @@ fn wide_layout_takes_less_memory() {
     let scene = load_scene("field-10k").unwrap();
     for builder in [Builder::Lbvh, Builder::Trbvh(TreeletSettings::BALANCED)] {
         for &collapse in WideCollapse::ALL {
-            let (_, tree) = build_wide(&scene, builder, collapse, None);
+            let (_, tree) = build_wide(&scene, builder, collapse, Spread::default());
             let binary = tree.download(gpu()).unwrap();
             let binary_bytes = binary.nodes.len() * 32 + binary.prim_indices.len() * 4;
             let wide = tree.wide.as_ref().unwrap().download(gpu()).unwrap();
@@ -538,7 +581,7 @@ fn both_layouts_trace_the_same_paths_on_a_deep_scene() {
         &scene,
         Builder::Trbvh(TreeletSettings::BALANCED),
         WideCollapse::Greedy,
-        None,
+        Spread::default(),
     );
     let render = |layout: Layout| {
         let settings = RenderSettings {
@@ -620,7 +663,7 @@ fn the_gpu_fingerprint_equals_the_cpu_twin_and_ignores_wide_numbering() {
     let scene = load_scene("field-10k").unwrap();
     let builder = Builder::Trbvh(TreeletSettings::BALANCED);
     let mut hasher = WordsHasher::new(gpu()).unwrap();
-    let (_, mut tree) = build_wide(&scene, builder, WideCollapse::Greedy, None);
+    let (_, mut tree) = build_wide(&scene, builder, WideCollapse::Greedy, Spread::default());
     let fingerprint = TreeFingerprint::of(gpu(), &mut hasher, &tree).unwrap();
     let binary = tree.download(gpu()).unwrap();
     let wide = tree.wide.as_ref().unwrap().download(gpu()).unwrap();
@@ -630,7 +673,12 @@ fn the_gpu_fingerprint_equals_the_cpu_twin_and_ignores_wide_numbering() {
         "GPU hash against the CPU twin"
     );
     for dispatches in [0, 1, 3] {
-        let (_, other) = build_wide(&scene, builder, WideCollapse::Greedy, Some(dispatches));
+        let (_, other) = build_wide(
+            &scene,
+            builder,
+            WideCollapse::Greedy,
+            Spread::levels(dispatches),
+        );
         assert_eq!(
             TreeFingerprint::of(gpu(), &mut hasher, &other).unwrap(),
             fingerprint,
@@ -655,7 +703,12 @@ fn the_gpu_fingerprint_equals_the_cpu_twin_and_ignores_wide_numbering() {
         fingerprint,
         "a reference duplicated"
     );
-    let (_, lbvh) = build_wide(&scene, Builder::Lbvh, WideCollapse::Greedy, None);
+    let (_, lbvh) = build_wide(
+        &scene,
+        Builder::Lbvh,
+        WideCollapse::Greedy,
+        Spread::default(),
+    );
     let lbvh_fingerprint = TreeFingerprint::of(gpu(), &mut hasher, &lbvh).unwrap();
     assert_ne!(lbvh_fingerprint.binary, fingerprint.binary);
     assert_ne!(lbvh_fingerprint.wide, fingerprint.wide);

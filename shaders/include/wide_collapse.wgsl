@@ -1,7 +1,7 @@
 // Binary-to-wide conversion, one wide node per invocation (CPU twins: `WideBvh::from_binary` and
-// `WideBvh::from_binary_optimal`, src/bvh/wide/convert.rs; the kernels wide_nodes_emit.wgsl and
-// wide_nodes_finish.wgsl run it level by level, top-down). Wide node w is made from binary node
-// `wide_sources[w]`:
+// `WideBvh::from_binary_optimal`, src/bvh/wide/convert.rs; the kernels run it top-down:
+// wide_nodes_emit.wgsl level by level, then wide_nodes_finish.wgsl a subtree per invocation).
+// Wide node w is made from binary node `wide_sources[w]`:
 // 1. Children, by one of two collapses (`params.collapse`):
 //    - optimal: the split of 8 slots that costs_climb.wgsl chose for the binary node, each part
 //      expanded by its node's choices (collapse_choices.wgsl), left before right: Ylitie et al.'s
@@ -52,8 +52,7 @@ const COLLAPSE_OPTIMAL: u32 = 1u;
 @group(0) @binding(4) var<storage, read_write> wide_prims: array<u32>;
 // Binary node of each wide node.
 @group(0) @binding(5) var<storage, read_write> wide_sources: array<u32>;
-// [0] wide nodes allocated, [1] references written, [2] capacity overflows, [3] the end of the
-// wide nodes the level dispatches emitted (the finish starts there).
+// [0] wide nodes allocated, [1] references written, [2] capacity overflows.
 @group(0) @binding(6) var<storage, read_write> wide_counters: array<atomic<u32>>;
 // Level records, 8 words per level: [workgroups x, y, z, first node, end node, 0, 0, 0]; even
 // levels in one buffer, odd in the other, so that a level dispatch reads its own record (and
@@ -340,12 +339,12 @@ var<workgroup> wave_children: atomic<u32>;
 var<workgroup> wave_prims: atomic<u32>;
 var<workgroup> wave_bases: vec2<u32>;
 
-// Emits wide node `w` if w < end (from binary node `wide_sources[w]`, the root from node 0), in a
+// Emits wide node `w` if `emits` (from binary node `wide_sources[w]`, the root from node 0), in a
 // wave with the workgroup's other invocations: the wave's children and references are allocated
-// with one device atomic per counter, not one per node. Returns the end of w's internal children
-// (0: none, or not emitted). Every invocation of the workgroup calls it (uniform control flow).
-fn emit_wave_node(w: u32, end: u32, lid: u32) -> u32 {
-    let emits = w < end;
+// with one device atomic per counter, not one per node. Returns w's internal children (first wide
+// node, count; count 0: none, or not emitted). Every invocation of the workgroup calls it
+// (uniform control flow).
+fn emit_wave_node(w: u32, emits: bool, lid: u32) -> vec2<u32> {
     var draft: WideDraft;
     var child_offset = 0u;
     var prim_offset = 0u;
@@ -369,13 +368,13 @@ fn emit_wave_node(w: u32, end: u32, lid: u32) -> u32 {
     }
     let bases = workgroupUniformLoad(&wave_bases);
     if !emits {
-        return 0u;
+        return vec2<u32>(0u);
     }
     let child_base = bases.x + child_offset;
     if child_base + draft.internal > params.capacity {
         atomicAdd(&wide_counters[2], 1u);
-        return 0u;
+        return vec2<u32>(0u);
     }
     commit_wide_node(w, draft, bases.y + prim_offset, child_base);
-    return select(0u, child_base + draft.internal, draft.internal > 0u);
+    return vec2<u32>(child_base, draft.internal);
 }

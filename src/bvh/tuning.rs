@@ -46,8 +46,9 @@ const SUBTREE_WIDTH_CHOICES: [u32; 4] = [32, 64, 128, 1024];
 /// overlapped rounds dispatch this many waves per round, and may want fewer).
 const LEVEL_DISPATCH_STEPS: [i32; 3] = [-6, -3, 3];
 /// The same for the wide conversion's level dispatches (the default is about every level a deep
-/// wide tree has, plus a few: a level past the tree dispatches no workgroups).
-const WIDE_LEVEL_STEPS: [i32; 3] = [-6, -3, 3];
+/// wide tree has, plus a few: a level past the tree dispatches no workgroups, and the finish
+/// emits the subtrees below the last level dispatched, so a shallow tree may want far fewer).
+const WIDE_LEVEL_STEPS: [i32; 5] = [-12, -9, -6, -3, 3];
 
 /// How a build spreads over the device, in every way that leaves its tree as it is.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -393,9 +394,9 @@ impl Dimension {
 
 /// The counts a tuning tries of a dimension whose default is `default`: None (the default), then
 /// the default moved by each of `steps`, at most `max`.
-fn stepped_counts(
+fn stepped_counts<const STEPS: usize>(
     default: Option<u32>,
-    steps: [i32; 3],
+    steps: [i32; STEPS],
     max: u32,
 ) -> impl Iterator<Item = Option<u32>> {
     let default = default.unwrap_or(0);

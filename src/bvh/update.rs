@@ -279,7 +279,7 @@ impl TreeUpdater {
             wide_levels: self
                 .converter
                 .is_some()
-                .then(|| WideConverter::level_dispatches(prims, device)),
+                .then(|| WideConverter::level_dispatches(prims)),
         })
     }
 

@@ -116,8 +116,8 @@ pub struct BenchArgs {
           value_parser = clap::value_parser!(u32).range(1..))]
     tune_pairs: u32,
     /// Levels of the wide conversion below the root's dispatch given an indirect dispatch of
-    /// their own, 0-32, the deeper ones emitted by one workgroup (wide layout; default: log2 of
-    /// the references + 2 on GPUs); a comma-separated list to compare. The tree is the same for
+    /// their own, 0-32, the subtrees below emitted by one more dispatch (wide layout; default:
+    /// log2 of the references + 2); a comma-separated list to compare. The tree is the same for
     /// every value
     #[arg(long, value_delimiter = ',',
           value_parser = clap::value_parser!(u32).range(0..=i64::from(MAX_WIDE_LEVEL_DISPATCHES)))]

@@ -1,7 +1,7 @@
 //! A compressed wide BVH on the GPU (layout of `bvh::wide::WideNode`), converted from a binary
 //! `Tree` by `bvh::wide::WideConverter`, with its references' triangles in order (`triangles`,
 //! what the wide traversal tests). `counters` holds [nodes, references, capacity
-//! overflows, end of the level dispatches' nodes] as the GPU wrote them; `records` the
+//! overflows] as the GPU wrote them; `records` the
 //! conversion's per-level records (indirect dispatch arguments; even levels in the first buffer,
 //! odd in the second); `collapse` the optimal collapse's scratch, per binary node. The buffers
 //! grow to what a conversion needs and are reused.
@@ -84,7 +84,7 @@ impl WideTree {
                 u64::from(prims) * std::mem::size_of::<Triangle>() as u64,
             )?,
             sources: storage_buffer_zeroed(ctx, "wide sources", u64::from(nodes) * 4)?,
-            counters: storage_buffer_zeroed(ctx, "wide counters", 16)?,
+            counters: storage_buffer_zeroed(ctx, "wide counters", 12)?,
             records: [
                 indirect_buffer_zeroed(ctx, "wide records (even levels)", record_bytes)?,
                 indirect_buffer_zeroed(ctx, "wide records (odd levels)", record_bytes)?,

@@ -6,8 +6,9 @@
 //! and the `START_LEVELS` levels below it (at most 8 and 64 wide nodes) are one direct dispatch
 //! of one workgroup; each of the next levels up to `level_dispatches` is an indirect dispatch
 //! whose size the previous level wrote (`wide_nodes_emit`); whatever lies deeper is emitted by
-//! one workgroup, level after level (`wide_nodes_finish`). Last, `triangles_gather` copies the
-//! references' triangles in order for the traversal. No CPU round trip.
+//! one more indirect dispatch, a subtree per wide node of the next level, depth-first
+//! (`wide_nodes_finish`). Last, `triangles_gather` copies the references' triangles in order for
+//! the traversal. No CPU round trip.
 
 use super::convert::max_wide_nodes;
 use super::costs_climb::{CostParams, COSTS_CLIMB};
@@ -20,7 +21,7 @@ use crate::bvh::{BvhNode, SahParams};
 use crate::device::{Geometry, Tree, WideTree};
 use crate::gpu::{GpuContext, ItemCount, Items};
 use crate::gpu::{Grid, Kernel, Recorder};
-use crate::Result;
+use crate::{Error, Result};
 
 /// Level dispatches a conversion records at most.
 pub const MAX_WIDE_LEVEL_DISPATCHES: u32 = 32;
@@ -29,6 +30,9 @@ pub const MAX_WIDE_LEVEL_DISPATCHES: u32 = 32;
 const START_LEVELS: u32 = 2;
 /// Words per level record (`RECORD_WORDS` in wide_collapse.wgsl).
 const RECORD_WORDS: u32 = 8;
+/// Subtree roots a workgroup of the finish holds in its pool by default, and at most (the
+/// WGSL `override POOL` of wide_nodes_finish.wgsl).
+pub const FINISH_POOL: u32 = 1024;
 
 pub struct WideConverter {
     link: Kernel<Items>,
@@ -73,21 +77,32 @@ impl WideConverter {
         self.options.collapse
     }
 
-    /// Level dispatches for a tree of up to `prims` references on a device of this type: on a
-    /// GPU about every level a deep tree has, log2 of the references plus 2 (the tail's one
-    /// workgroup runs on one multiprocessor: with log8 + 4 levels dispatched, conference's wide
-    /// stage took 4.7-5.3 ms on an H200 against 0.5-0.8 ms for the other shared scenes, whose
-    /// trees are shallower; a level past the tree's depth launches no workgroups); on a CPU
-    /// device, where that workgroup is one thread, log8 + 8 (lavapipe, trbvh trees, the stage in
-    /// three alternating runs against log8 + 4: conference 47-48 -> 36-39 ms, crytek_sponza
-    /// 30-33 -> 28-29 ms, lost_empire unchanged).
-    pub fn level_dispatches(prims: u32, device: wgpu::DeviceType) -> u32 {
-        let prims = prims.max(1);
-        let levels = match device {
-            wgpu::DeviceType::Cpu => prims.ilog2() / 3 + 8,
-            _ => prims.ilog2() + 2,
+    /// Level dispatches for a tree of up to `prims` references: about every level a deep tree
+    /// has, log2 of the references plus 2 (a level past the tree's depth launches no
+    /// workgroups; the finish takes whatever lies deeper). With the tail in one workgroup, as it
+    /// was, fewer cost much more on an H200 (conference, 14 wide levels: 0.86 ms at 14, 5.1 at
+    /// 10); the finish now spreads the tail over a workgroup per 64 of its roots, and the best
+    /// count on a GPU is not yet measured (`bench --wide-level-dispatches`; the tuner tries
+    /// counts down to 12 below this).
+    pub fn level_dispatches(prims: u32) -> u32 {
+        (prims.max(1).ilog2() + 2).min(MAX_WIDE_LEVEL_DISPATCHES)
+    }
+
+    /// Gives the finish's workgroups a pool of `roots` subtree roots (1..=`FINISH_POOL`; tests:
+    /// a pool that fills gives the same tree); `None` restores the default.
+    pub fn set_finish_pool(&mut self, ctx: &GpuContext, roots: Option<u32>) -> Result<()> {
+        self.finish = match roots {
+            None => Kernel::new(ctx, &WIDE_NODES_FINISH),
+            Some(roots @ 1..=FINISH_POOL) => {
+                Kernel::with_overrides(ctx, &WIDE_NODES_FINISH, &[("POOL", f64::from(roots))])
+            }
+            Some(roots) => {
+                return Err(Error::InvalidArgument(format!(
+                    "a pool of {roots} subtree roots (1 to {FINISH_POOL})"
+                )))
+            }
         };
-        levels.min(MAX_WIDE_LEVEL_DISPATCHES)
+        Ok(())
     }
 
     /// Fixes the number of level dispatches (tests: every schedule gives the same tree); `None`
@@ -117,7 +132,7 @@ impl WideConverter {
         let level_dispatches = self
             .options
             .level_dispatches
-            .unwrap_or_else(|| Self::level_dispatches(prims, ctx.info.device_type));
+            .unwrap_or_else(|| Self::level_dispatches(prims));
         let record_bytes = u64::from(RECORD_WORDS * (MAX_WIDE_LEVEL_DISPATCHES + 2)) * 4;
         let fits = tree.wide.as_ref().is_some_and(|w| {
             w.capacity >= capacity
@@ -216,9 +231,10 @@ impl WideConverter {
             );
         }
         let last = level_dispatches + 1;
-        pass.dispatch(
+        pass.dispatch_indirect(
             &self.finish,
-            Grid::workgroups(1, 1),
+            &wide.records[(last % 2) as usize],
+            u64::from(RECORD_WORDS * last) * 4,
             &params(last),
             &buffers(last),
         );

@@ -19,7 +19,7 @@ mod wide_nodes_emit;
 mod wide_nodes_finish;
 
 pub use convert::{check_leaf_sizes, max_wide_nodes, MAX_WIDE_LEAF_SIZE};
-pub use converter::{WideConverter, MAX_WIDE_LEVEL_DISPATCHES};
+pub use converter::{WideConverter, FINISH_POOL, MAX_WIDE_LEVEL_DISPATCHES};
 pub use costs_climb::{CostParams, COSTS_CLIMB};
 pub use node::{Slot, WideBvh, WideNode, WIDTH};
 pub use nodes_link::NODES_LINK;
@@ -102,7 +102,7 @@ impl WideCollapse {
 }
 
 /// How a build's wide conversion runs: its collapse, and how many levels below the root's
-/// dispatch get an indirect dispatch of their own before one workgroup finishes the rest
+/// dispatch get an indirect dispatch of their own before the finish emits the subtrees below
 /// (`WideConverter::set_options`; None: from the tree's size). Every count makes the same
 /// tree (tested); `bench --wide-level-dispatches` times them.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
