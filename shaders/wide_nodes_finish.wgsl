@@ -43,8 +43,10 @@ fn main(
         var parent = root;
         var siblings_end = root + 1u;
         loop {
-            // The previous step's gifts are in the pool.
+            // The previous step's gifts are in the pool (workgroup memory), and their sources,
+            // which other invocations wrote, are stored (storage memory).
             workgroupBarrier();
+            storageBarrier();
             if !walks {
                 let top = min(atomicLoad(&pool_top), POOL);
                 let take = atomicAdd(&pool_takes, 1u);
