@@ -66,8 +66,9 @@ fn main(
         }
         return;
     }
-    let first = this_level[record_word(params.level, 3u)];
-    let end = max(this_level[record_word(params.level, 4u)], first);
+    let range = record_range(params.level);
+    let first = range.x;
+    let end = range.y;
     if gid.x == 0u {
         open_next_level(params.level, end);
     }

@@ -30,8 +30,9 @@ fn main(
     @builtin(workgroup_id) wid: vec3<u32>,
     @builtin(num_workgroups) groups: vec3<u32>,
 ) {
-    let first = this_level[record_word(params.level, 3u)];
-    let end = max(this_level[record_word(params.level, 4u)], first);
+    let range = record_range(params.level);
+    let first = range.x;
+    let end = range.y;
     // The workgroups stride over the level's nodes a wave at a time.
     let stride = groups.x * EMIT_WORKGROUP;
     for (var wave = first + wid.x * EMIT_WORKGROUP; wave < end; wave += stride) {
@@ -102,7 +103,7 @@ fn main(
                     if node != root {
                         parent = wide_sources[node];
                         let above = wide_nodes[parent];
-                        siblings_end = above.child_base + countOneBits(above.exponents >> 24u);
+                        siblings_end = above.child_base + countOneBits(internal_slots(above));
                     }
                 }
             }

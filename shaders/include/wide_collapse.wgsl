@@ -69,6 +69,13 @@ fn record_word(level: u32, word: u32) -> u32 {
     return RECORD_WORDS * level + word;
 }
 
+// The wide nodes [first, end) of level `level`'s record (this_level), which a dispatch sized by
+// that record emits or walks from.
+fn record_range(level: u32) -> vec2<u32> {
+    let first = this_level[record_word(level, 3u)];
+    return vec2<u32>(first, max(this_level[record_word(level, 4u)], first));
+}
+
 // The smallest biased exponent e (1..=253) with lo + 255·2^(e−127) ≥ hi.
 fn axis_exponent(lo: f32, hi: f32) -> u32 {
     let bits = bitcast<u32>(hi - lo);
@@ -314,7 +321,7 @@ fn commit_wide_node(w: u32, draft: WideDraft, prim_base: u32, child_base: u32) {
     var out = draft.node;
     out.prim_base = select(0u, prim_base, draft.prims > 0u);
     out.child_base = select(0u, child_base, draft.internal > 0u);
-    let imask = out.exponents >> 24u;
+    let imask = internal_slots(out);
     var next_prim = prim_base;
     var next_child = child_base;
     for (var s = 0u; s < 8u; s++) {

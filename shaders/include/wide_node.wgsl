@@ -20,6 +20,11 @@ struct WideNode {
     hi_z: vec2<u32>,
 }
 
+// Bit s set where slot s holds an internal child (imask, the high byte of `exponents`).
+fn internal_slots(node: WideNode) -> u32 {
+    return node.exponents >> 24u;
+}
+
 // Byte `slot` of eight bytes packed little-endian into two words.
 fn slot_byte(bytes: vec2<u32>, slot: u32) -> u32 {
     return (bytes[slot >> 2u] >> ((slot & 3u) * 8u)) & 0xffu;

@@ -164,7 +164,7 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_ze
         // The padding of flat axes (see BoxRay) goes into the offsets of the near and far planes.
         let near_offset = offset - boxes.slab_pad;
         let far_offset = offset + boxes.slab_pad;
-        let imask = node.exponents >> 24u;
+        let imask = internal_slots(node);
         // Which quantized planes are near and far along each axis for this ray.
         let near_x = select(node.hi_x, node.lo_x, near_is_lo.x);
         let near_y = select(node.hi_y, node.lo_y, near_is_lo.y);
