@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # Everything a lent GPU is asked to measure, in one `device` call that fits a short lease, step by
 # step in this order (the trace's correctness and the build's figures first): the test binaries
-# ("tests"), teams of 32 invocations per treelet in the dispatched levels, in the overlapped rounds'
-# dispatched waves and in the climb, each threshold beside none ("teams"; TEAM_SCENES), the
-# treelet rounds' lowest levels per subtree at each height beside by level
-# ("subtrees"), every build with wgpu's indirect validation on and off ("indirect"), the
+# ("tests"), the phased rounds beside the bottom-up ones ("phases"; PHASE_SCENES), teams of 32
+# invocations per treelet in the dispatched levels, in the overlapped rounds' dispatched waves and
+# in the climb, each threshold beside none ("teams"; TEAM_SCENES), the treelet rounds' lowest
+# levels per subtree at each height beside by level ("subtrees"), every build with wgpu's indirect validation on and off ("indirect"), the
 # binary-vs-wide table ("layouts"), build scaling with each GPU builder's schedule
 # tuned ("scaling"), the round schedules each fixed beside the default and the tuned one (the
 # DP's forms in the dispatched levels and the climb, the overlapped rounds, the team thresholds
@@ -38,7 +38,7 @@ save() { tar -C $res -czf "$final/results.tar.gz" .; }
 step() {
   local name=$1 cap=$2 left
   shift 2
-  case " ${STEPS:-tests teams subtrees indirect layouts scaling schedules variants widelevels probe profile kernels} " in
+  case " ${STEPS:-tests phases teams subtrees indirect layouts scaling schedules variants widelevels probe profile kernels} " in
     *" $name "*) ;;
     *) return ;;
   esac
@@ -150,6 +150,17 @@ teams() {
   done
 }
 export -f teams
+# The phased rounds (`--phases`, README "Phased rounds"): each round in 7 phases by depth instead
+# of its 20-37 treelet levels bottom-up, with 3 rounds (SAH +0.0 to +1.0 % on the shared scenes)
+# and 4 (-0.5 to +0.6 %), beside the bottom-up rounds, all untuned; the whole build, its
+# treelet stages and SAH.
+phases() {
+  for s in ${PHASE_SCENES:-conference crytek_sponza sibenik lost_empire field:224 field:707 field:2000}; do
+    timeout 40 $TREELET bench --scene $s --builder trbvh,trbvh-split --phases 0,7 --rounds 3,4 \
+      --tune-schedule off $small >> $res/phases.jsonl
+  done
+}
+export -f phases
 export small base work
 tests() {
   # shellcheck disable=SC2016
@@ -158,6 +169,7 @@ tests() {
 }
 export -f tests
 step tests 150 bash -c tests
+step phases 120 bash -c phases
 step teams 150 bash -c teams
 step subtrees 120 bash -c subtrees
 step indirect 150 bash -c indirect
@@ -214,6 +226,8 @@ def round_rows(name, title, columns):
               f" {r['dispatches']:4} {r.get('sah') or 0:.4f}")
 round_rows("subtrees.jsonl", "builder, subtree levels, width, level dispatches asked",
            [("builder", 11), ("subtree_levels", 2), ("subtree_width", 4), ("level_dispatches", 4)])
+round_rows("phases.jsonl", "builder, rounds, phases",
+           [("builder", 11), ("rounds", 2), ("phases", 4)])
 round_rows("teams.jsonl", "overlap, teams below (levels), (climb)",
            [("round_overlap", 4), ("team_below", 5), ("climb_team_below", 3)])
 print("indirect.jsonl: scene, builder, layout, indirect validation, turn, build ms (min/median/max), wide ms,"

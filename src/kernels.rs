@@ -17,6 +17,7 @@ pub const ALL: &[&KernelInfo] = &[
     &sort::COUNTS_ADD.info,
     &bvh::treelet::NODES_LEVEL.info,
     &bvh::treelet::TREELETS_OPTIMIZE.info,
+    &bvh::treelet::ROOTS_PHASE.info,
     &bvh::treelet::SUBTREES_OPTIMIZE.info,
     &bvh::treelet::TREELETS_CLIMB.info,
     &bvh::treelet::WAVES_FIND.info,

@@ -333,6 +333,36 @@ fn bench_last_round_size_reports_each_size() {
     );
 }
 
+/// `bench --phases 0,7` builds trbvh with the bottom-up rounds and with each round in 7 phases,
+/// reported in `phases` (null: bottom-up) and in no other builder's record: both trees are valid,
+/// the phased one within 1 % of the bottom-up one's SAH, and the phases take no treelet levels of
+/// their own (no climb). Too few phases for the treelet size, or phases with overlapped rounds,
+/// are refused.
+#[test]
+fn bench_phases_reports_each_count() {
+    let records = quick_bench("lbvh,trbvh", &["--phases", "0,7"]);
+    assert_eq!(u64_values(&records, "phases"), [None, None, Some(7)]);
+    assert!(records.iter().all(|r| r["valid"] == true), "{records:?}");
+    let (bottom_up, phased) = (
+        records[1]["sah"].as_f64().unwrap(),
+        records[2]["sah"].as_f64().unwrap(),
+    );
+    assert!(
+        (phased / bottom_up - 1.0).abs() < 0.01,
+        "{phased} against {bottom_up}"
+    );
+    assert!(
+        records[2]["stages_ms"]["treelets climb"].is_null(),
+        "{:?}",
+        records[2]
+    );
+    assert_trbvh_bench_refuses(&["--phases", "6"], "treelet phases must be 7..=16");
+    assert_trbvh_bench_refuses(
+        &["--phases", "7", "--round-overlap", "6"],
+        "the phased treelet rounds take no overlap and no subtrees",
+    );
+}
+
 /// Field `key` of each record, where it is a number.
 fn u64_values(records: &[serde_json::Value], key: &str) -> Vec<Option<u64>> {
     records.iter().map(|r| r[key].as_u64()).collect()
@@ -722,7 +752,7 @@ fn overflowing_triangles_are_reported_as_such() {
 
 #[test]
 fn options_of_other_builders_are_refused() {
-    let cases: [(&[&str], &str); 14] = [
+    let cases: [(&[&str], &str); 15] = [
         (
             &["render", "--builder", "sweep", "--treelet-size", "99"],
             "--treelet-size does not apply to builder sweep",
@@ -742,6 +772,10 @@ fn options_of_other_builders_are_refused() {
         (
             &["bench", "--builder", "lbvh", "--last-round-size", "5"],
             "--last-round-size does not apply to builder lbvh",
+        ),
+        (
+            &["bench", "--builder", "lbvh", "--phases", "7"],
+            "--phases does not apply to builder lbvh",
         ),
         (
             &["bench", "--builder", "sbvh", "--climb-team-below", "8"],

@@ -49,8 +49,10 @@ struct RoundParams {
     // The most cut roots of level l a workgroup of subtrees_optimize.wgsl takes besides its
     // list's bound: subtree_width >> (l - 1), at least 1 (`subtrees_per_workgroup`).
     subtree_width: u32,
-    pad0: u32,
-    pad1: u32,
+    // Phased rounds (roots_phase.wgsl): the phases per round and the depth residue of this
+    // phase's roots; 0 elsewhere.
+    phases: u32,
+    residue: u32,
 }
 
 // The schedule buffer (u32 words): per level L = 1 ..= MAX_LEVEL_DISPATCHES + 1, the number of

@@ -250,8 +250,12 @@ impl TreeUpdater {
         }
         let device = ctx.info.device_type;
         // The stages' sizes (the references of pre-splitting where the builder splits) and the
-        // treelet rounds' level dispatches.
+        // treelet rounds' level dispatches (none for the phased rounds).
         let (prims, round_levels, round_levels_vary, overlap_reach) = match &self.producer {
+            // The phased rounds take no level schedule: only the stages' sizes apply.
+            Producer::Trbvh(b) if b.settings.phases.is_some() => {
+                (b.leaf_capacity(triangles), None, false, 0)
+            }
             Producer::Trbvh(b) => {
                 let prims = b.leaf_capacity(triangles);
                 let size = b.settings.treelet_size;

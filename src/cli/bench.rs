@@ -299,6 +299,8 @@ struct BenchRecord {
     rounds: Option<u32>,
     /// Treelet builders with rounds: the last round's treelet size in effect.
     last_round_size: Option<u32>,
+    /// Treelet builders: the phases per round (`--phases`; null: bottom-up, the paper's order).
+    phases: Option<u32>,
     split_budget: Option<f64>,
     /// Treelet builders: the levels per round given a dispatch (null: from the tree's size, per
     /// round) and the team thresholds in effect in the dispatched levels and in the climb.
@@ -622,6 +624,7 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
             last_round_size: builder
                 .treelet_settings()
                 .and_then(|s| s.last_round_treelets()),
+            phases: builder.treelet_settings().and_then(|s| s.phases),
             split_budget: builder
                 .treelet_settings()
                 .map(|s| f64::from(s.split_percent) / 100.0),

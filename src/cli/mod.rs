@@ -80,6 +80,11 @@ pub struct TraceArgs {
     /// treelet size; not with --round-overlap); `bench` takes a comma-separated list
     #[arg(long, value_delimiter = ',')]
     last_round_size: Vec<u32>,
+    /// Each round of trbvh in P phases by depth instead of bottom-up (P at least the treelet
+    /// size, at most 16; 0: bottom-up, the paper's order and the default); `bench` takes a
+    /// comma-separated list
+    #[arg(long, value_delimiter = ',')]
+    phases: Vec<u32>,
     /// Pre-splitting budget β of trbvh-split (extra references per triangle, 0..=1; default 0.3);
     /// `bench` takes a comma-separated list
     #[arg(long, value_delimiter = ',', value_parser = parse_split_budget)]
@@ -106,20 +111,23 @@ fn or_default<T: Copy>(values: &[T]) -> Vec<Option<T>> {
 }
 
 impl TraceArgs {
-    /// Every combination of the requested treelet sizes, rounds and last rounds' sizes (the
-    /// preset's where not given).
+    /// Every combination of the requested treelet sizes, rounds, last rounds' sizes and phases
+    /// (the preset's where not given).
     fn treelet_variants(&self) -> Vec<TreeletSettings> {
         let preset = self.preset.unwrap_or(TreeletSettings::BALANCED);
         let mut variants = Vec::new();
         for treelet_size in or_default(&self.treelet_size) {
             for rounds in or_default(&self.rounds) {
                 for last_round_size in or_default(&self.last_round_size) {
-                    variants.push(TreeletSettings {
-                        treelet_size: treelet_size.unwrap_or(preset.treelet_size),
-                        rounds: rounds.unwrap_or(preset.rounds),
-                        split_percent: 0,
-                        last_round_size: last_round_size.or(preset.last_round_size),
-                    });
+                    for phases in or_default(&self.phases) {
+                        variants.push(TreeletSettings {
+                            treelet_size: treelet_size.unwrap_or(preset.treelet_size),
+                            rounds: rounds.unwrap_or(preset.rounds),
+                            split_percent: 0,
+                            last_round_size: last_round_size.or(preset.last_round_size),
+                            phases: phases.map_or(preset.phases, |p| (p > 0).then_some(p)),
+                        });
+                    }
                 }
             }
         }
@@ -133,6 +141,7 @@ impl TraceArgs {
             builders,
             &[
                 ("--treelet-size", !self.treelet_size.is_empty()),
+                ("--phases", !self.phases.is_empty()),
                 ("--rounds", !self.rounds.is_empty()),
                 ("--last-round-size", !self.last_round_size.is_empty()),
                 ("--preset", self.preset.is_some()),

@@ -51,6 +51,7 @@ fn variants(builder: Builder, quick: bool) -> Vec<Builder> {
                     rounds,
                     split_percent: 0,
                     last_round_size: None,
+                    phases: None,
                 })
             })
         })

@@ -188,6 +188,51 @@ impl WorkingTree {
         sizes
     }
 
+    /// The rounds of `rounds` (treelet size, γ) each in `phases` phases by depth (the GPU's
+    /// `TreeletSettings::phases`, module `phases`): counts and costs once, then per round and phase
+    /// k every root (an internal node of at least γ primitives) at depth ≡ phases − 1 − k (mod
+    /// phases) in the tree the phases before left, its cost first recomputed from its children's.
+    /// Roots of one phase lie at least `phases` levels apart, deeper than a treelet reaches below
+    /// its root (`phases` is at least the treelet size), so their treelets are disjoint and their
+    /// order does not matter. Costs are not refreshed otherwise: a node above a treelet that
+    /// lowered its cost keeps its own until its turn as a root (a node that is no root keeps it,
+    /// as the collapse reads it; on the shared scenes the refreshed costs give the same SAH to
+    /// four places).
+    pub fn optimize_phased(&mut self, model: &CostModel, rounds: &[(u32, u32)], phases: u32) {
+        self.leaf_costs(model);
+        for node in self.post_order() {
+            self.finish_node(node, model);
+        }
+        for &(treelet_size, gamma) in rounds {
+            for k in 0..phases {
+                for root in self.phase_roots(gamma, phases, phases - 1 - k) {
+                    self.finish_node(root, model);
+                    self.optimize_treelet(root, model, treelet_size);
+                }
+            }
+        }
+    }
+
+    /// The internal nodes of at least `gamma` primitives whose depth is ≡ `residue` (mod
+    /// `phases`), by index (the GPU kernel `roots_phase` finds them by walking up to the root).
+    fn phase_roots(&self, gamma: u32, phases: u32, residue: u32) -> Vec<u32> {
+        let mut roots = Vec::new();
+        let mut stack = vec![(0u32, 0u32)];
+        while let Some((node, depth)) = stack.pop() {
+            let n = self.nodes[node as usize];
+            if n.is_leaf() {
+                continue;
+            }
+            if self.prim_counts[node as usize] >= gamma && depth % phases == residue {
+                roots.push(node);
+            }
+            let (l, r) = n.children();
+            stack.extend([(l, depth + 1), (r, depth + 1)]);
+        }
+        roots.sort_unstable();
+        roots
+    }
+
     /// Optimizes the treelet at `root`; returns the internal nodes it rewrote (none when the
     /// topology is kept).
     fn optimize_treelet(&mut self, root: u32, model: &CostModel, treelet_size: u32) -> Vec<u32> {

@@ -15,6 +15,7 @@ pub(crate) mod dp_unrolled;
 mod nodes_compact;
 mod nodes_level;
 mod nodes_mark;
+mod phases;
 mod rounds;
 mod subtrees_optimize;
 mod treelets_climb;
@@ -28,6 +29,7 @@ pub use dp::{
 pub use nodes_compact::NODES_COMPACT;
 pub use nodes_level::NODES_LEVEL;
 pub use nodes_mark::NODES_MARK;
+pub use phases::{MAX_PHASES, ROOTS_PHASE};
 pub use subtrees_optimize::SUBTREES_OPTIMIZE;
 pub use treelets_climb::TREELETS_CLIMB;
 pub use treelets_optimize::TREELETS_OPTIMIZE;
@@ -42,6 +44,7 @@ pub use crate::gpu::constants::{
 };
 
 use collapse::{Collapse, CollapseBuffers};
+use phases::PhasedRounds;
 use rounds::{Round, TreeletRounds, TreeletState, SCHEDULE_WORDS};
 use waves::{Overlap, OverlappedRounds};
 
@@ -74,6 +77,13 @@ pub struct TreeletSettings {
     /// round's cost (966 partition tests for 7 leaves, 90 for 5), and the last round improves
     /// the tree least (README, "A cheaper last round").
     pub last_round_size: Option<u32>,
+    /// Each round in P phases by depth instead of bottom-up, P at least every round's treelet
+    /// size: phase k optimizes the roots whose depth is ≡ P − 1 − k (mod P), depths as the
+    /// phases before left them (`WorkingTree::optimize_phased`). Not the paper's order, so not
+    /// its tree: a round is P dispatches of many treelets each, not one per treelet level
+    /// (20-37 on the shared scenes, most of them a few treelets waiting on one another). None:
+    /// the paper's bottom-up rounds.
+    pub phases: Option<u32>,
 }
 
 impl TreeletSettings {
@@ -83,6 +93,7 @@ impl TreeletSettings {
         rounds: 1,
         split_percent: 0,
         last_round_size: None,
+        phases: None,
     };
     /// The paper's reference setting: treelets of 7 leaves, 3 rounds.
     pub const BALANCED: Self = Self {
@@ -90,6 +101,7 @@ impl TreeletSettings {
         rounds: 3,
         split_percent: 0,
         last_round_size: None,
+        phases: None,
     };
     /// Largest treelets the kernel supports, more rounds.
     pub const HIGH_QUALITY: Self = Self {
@@ -97,6 +109,7 @@ impl TreeletSettings {
         rounds: 4,
         split_percent: 0,
         last_round_size: None,
+        phases: None,
     };
 
     /// Leaves per treelet of round `round` (from 0).
@@ -166,6 +179,16 @@ impl TreeletSettings {
                 "split budget must be 0..=1 (0..=100 %), got {} %",
                 self.split_percent
             )));
+        }
+        if let Some(phases) = self.phases {
+            let largest = self.treelet_size.max(self.last_round_size.unwrap_or(0));
+            if !(largest..=MAX_PHASES).contains(&phases) {
+                return Err(Error::InvalidArgument(format!(
+                    "treelet phases must be {largest}..={MAX_PHASES} (at least the treelet size: \
+                     roots of one phase lie that many levels apart, so their treelets are \
+                     disjoint), got {phases}"
+                )));
+            }
         }
         if self.rounds > 16 {
             return Err(Error::InvalidArgument(format!(
@@ -241,8 +264,21 @@ pub fn optimize_lbvh_cpu(
     settings: &TreeletSettings,
     model: &CostModel,
 ) -> WorkingTree {
-    for (round, gamma) in settings.gammas().into_iter().enumerate() {
-        tree.optimize_round(model, settings.round_size(round), gamma);
+    let gammas = settings.gammas();
+    match settings.phases {
+        Some(phases) if gammas[0] != u32::MAX => {
+            let rounds: Vec<(u32, u32)> = gammas
+                .iter()
+                .enumerate()
+                .map(|(round, &gamma)| (settings.round_size(round), gamma))
+                .collect();
+            tree.optimize_phased(model, &rounds, phases);
+        }
+        _ => {
+            for (round, gamma) in gammas.into_iter().enumerate() {
+                tree.optimize_round(model, settings.round_size(round), gamma);
+            }
+        }
     }
     tree
 }
@@ -310,6 +346,8 @@ pub struct TrbvhBuilder {
     rounds: TreeletRounds,
     /// The rounds overlapped in waves (`RoundSchedule::overlap`).
     waves: OverlappedRounds,
+    /// The rounds in phases by depth (`TreeletSettings::phases`).
+    phased: PhasedRounds,
     collapse: Collapse,
     scratch: Option<Scratch>,
     /// Leaves the last build's working tree had room for.
@@ -330,6 +368,7 @@ impl TrbvhBuilder {
             presplit: None,
             rounds: TreeletRounds::new(ctx)?,
             waves: OverlappedRounds::new(),
+            phased: PhasedRounds::new(ctx),
             collapse: Collapse::new(ctx)?,
             scratch: None,
             last_capacity: 0,
@@ -459,6 +498,15 @@ impl TrbvhBuilder {
     ) -> Result<()> {
         self.settings.validate(&self.sah)?;
         self.rounds.schedule.check(self.settings.treelet_size)?;
+        if self.settings.phases.is_some()
+            && (self.rounds.schedule.overlap.is_some() || self.rounds.schedule.subtree_levels() > 0)
+        {
+            return Err(Error::InvalidArgument(
+                "the phased treelet rounds take no overlap and no subtrees (a phase is one \
+                 dispatch of every root at its depths): drop the phases or those schedule options"
+                    .into(),
+            ));
+        }
         if self.rounds.schedule.overlap.is_some() && !self.settings.one_treelet_size() {
             return Err(Error::InvalidArgument(
                 "the overlapped treelet rounds take one treelet size (a wave runs the treelets of \
@@ -523,7 +571,8 @@ impl TrbvhBuilder {
         tree.reserve(ctx, 2 * n - 1, n)?;
         self.collapse.reserve(ctx, n)?;
         let gammas = self.settings.gammas();
-        self.rounds.reserve(ctx, n, &gammas)?;
+        let phases = self.settings.phases.filter(|_| gammas[0] != u32::MAX);
+        self.rounds.reserve(ctx, n, &gammas, phases.is_some())?;
         let scratch = self.scratch.as_ref().expect("reserved");
         let mut state = TreeletState {
             nodes: &scratch.nodes,
@@ -551,13 +600,27 @@ impl TrbvhBuilder {
         };
         // The first round's schedule climbs the LBVH and counts arrivals.
         rec.encoder().clear_buffer(&scratch.arrivals, 0, None);
-        match self
+        let overlap = self
             .rounds
             .schedule
             .overlap
-            .filter(|_| gammas[0] != u32::MAX)
-        {
-            Some(reach) => {
+            .filter(|_| gammas[0] != u32::MAX);
+        match (phases, overlap) {
+            (Some(phases), _) => {
+                // The first round's schedule builds the LBVH with its counts and costs (its roots of
+                // level 1, bucketed too, go unused); then every round phase by phase.
+                rec.encoder().clear_buffer(&scratch.schedule, 0, None);
+                let mut pass = rec.pass("treelets");
+                self.rounds
+                    .record_levels(&mut pass, ctx, count, &state, &round(0), 0);
+                drop(pass);
+                for r in 0..gammas.len() {
+                    rec.encoder().clear_buffer(&scratch.schedule, 0, None);
+                    self.phased
+                        .record(rec, count, &state, &self.rounds, &round(r), phases);
+                }
+            }
+            (None, Some(reach)) => {
                 // The first round's schedule (with the LBVH), then every round in waves.
                 rec.encoder().clear_buffer(&scratch.schedule, 0, None);
                 let rounds = gammas.len() as u32;
@@ -587,7 +650,7 @@ impl TrbvhBuilder {
                     &overlap,
                 );
             }
-            None => {
+            (None, None) => {
                 for r in 0..gammas.len() {
                     rec.encoder().clear_buffer(&scratch.schedule, 0, None);
                     state.levels = &scratch.levels[r % 2];

@@ -86,7 +86,10 @@ pub struct RoundParams {
     /// Cut roots of level l per workgroup of `subtrees_optimize` at most: this >> (l − 1)
     /// (`RoundSchedule::subtree_width`).
     subtree_width: u32,
-    pad: [u32; 2],
+    /// Phased rounds (`phases`): the phases per round and the depth residue of the phase's
+    /// roots (`roots_phase`); 0 elsewhere.
+    pub(crate) phases: u32,
+    pub(crate) residue: u32,
 }
 const _: () = assert!(std::mem::size_of::<RoundParams>() == 80);
 
@@ -99,6 +102,35 @@ impl RoundParams {
             level_first,
             team_below: schedule.climb_team_below(),
             ..self
+        }
+    }
+
+    /// The parameters of phase `phase` (from 0) of a round in `phases` phases (`phases`) over a
+    /// tree of `n` leaves: `roots_phase` (grid row pitch `row_pitch`) buckets the roots of depth
+    /// ≡ phases − 1 − phase in schedule word `phase` (level `phase` + 1), `treelets_optimize`
+    /// optimizes them from slot 0, one invocation each, computing no next levels.
+    pub(crate) fn phase(n: u32, row_pitch: u32, round: &Round, phases: u32, phase: u32) -> Self {
+        Self {
+            count: n,
+            row_pitch,
+            gamma: round.gamma,
+            max_leaf_size: round.model.max_leaf_size,
+            ci: round.model.ci,
+            ct: round.model.ct,
+            zero: 0,
+            level_dispatches: 0,
+            level: phase + 1,
+            levels_only: 0,
+            team_below: 0,
+            next_gamma: u32::MAX,
+            level_first: 0,
+            rounds: 0,
+            reach: 0,
+            wave: 0,
+            subtree_levels: 0,
+            subtree_width: 0,
+            phases,
+            residue: phases - 1 - phase,
         }
     }
 
@@ -130,7 +162,8 @@ impl RoundParams {
             wave,
             subtree_levels: 0,
             subtree_width: 0,
-            pad: [0; 2],
+            phases: 0,
+            residue: 0,
         }
     }
 }
@@ -467,7 +500,14 @@ impl TreeletRounds {
 
     /// Grows the buckets for rounds of up to `n` leaves with these smallest roots (u32::MAX: a
     /// round without treelets).
-    pub fn reserve(&mut self, ctx: &GpuContext, n: u32, gammas: &[u32]) -> Result<()> {
+    /// With `every_internal`, room for every internal node (a phase's roots: `phases`).
+    pub fn reserve(
+        &mut self,
+        ctx: &GpuContext,
+        n: u32,
+        gammas: &[u32],
+        every_internal: bool,
+    ) -> Result<()> {
         let words = gammas
             .iter()
             .filter(|&&gamma| gamma != u32::MAX)
@@ -482,7 +522,7 @@ impl TreeletRounds {
             })
             .max()
             .unwrap_or(0)
-            .max(1);
+            .max(if every_internal { u64::from(n) } else { 1 });
         if self.roots.as_ref().is_none_or(|r| r.size() < words * 4) {
             self.roots = None;
             self.roots = Some(storage_buffer_zeroed(ctx, "treelet roots", words * 4)?);
@@ -511,9 +551,7 @@ impl TreeletRounds {
             return;
         }
         let roots = self.roots();
-        let optimize = self
-            .optimize
-            .get(ctx, round.treelet_size, self.schedule.dp());
+        let optimize = self.optimize(ctx, round.treelet_size);
         let treelet_buffers = [
             state.nodes,
             state.parents,
@@ -552,6 +590,12 @@ impl TreeletRounds {
             .get(ctx, round.treelet_size, self.schedule.climb_dp());
         rec.pass("treelets climb")
             .dispatch(climb, Grid::workgroups(1, 1), &params, &climb_buffers);
+    }
+
+    /// `treelets_optimize` for treelets of `treelet_size` leaves, with the DP form of the
+    /// dispatched levels.
+    pub(crate) fn optimize(&self, ctx: &GpuContext, treelet_size: u32) -> &Kernel<RoundParams> {
+        self.optimize.get(ctx, treelet_size, self.schedule.dp())
     }
 
     /// `subsets_by_size`, which the teams read.
@@ -610,7 +654,8 @@ impl TreeletRounds {
             // refuses both).
             subtree_levels: self.schedule.subtree_levels(),
             subtree_width: self.schedule.subtree_width(ctx.info.device_type),
-            pad: [0; 2],
+            phases: 0,
+            residue: 0,
         };
         let limit = count.limit(ctx);
         pass.dispatch(
@@ -737,6 +782,7 @@ mod tests {
                     rounds,
                     split_percent: 0,
                     last_round_size: None,
+                    phases: None,
                 };
                 let tree = optimize_lbvh_cpu(lbvh.clone(), &settings, &model);
                 for gamma in [3u32, 5, 7, 14, 28, 56] {

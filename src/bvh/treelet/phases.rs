@@ -1,0 +1,86 @@
+//! Phased treelet rounds (`TreeletSettings::phases`; not the paper's order: README, "Phased
+//! rounds"). The paper optimizes a round's treelets bottom-up, so a round waits on one treelet
+//! per treelet level (20-37 levels on the shared scenes, the upper ones a few treelets each);
+//! here each round takes P phases instead, phase k optimizing every root whose depth is ≡
+//! P − 1 − k (mod P) in the tree the phases before left: a `roots_phase` dispatch finds them
+//! (each root walks up to the tree's root) and buckets them with the phase's indirect arguments,
+//! then a `treelets_optimize` dispatch optimizes them, one invocation each. Roots of a phase lie
+//! at least P levels apart, more than a treelet reaches below its root, so the phase's treelets
+//! are disjoint. CPU twin: `WorkingTree::optimize_phased`.
+
+use super::rounds::{Round, RoundParams, TreeletRounds, TreeletState, SCHEDULE_ARGS};
+use crate::gpu::constants::MAX_LEVEL_DISPATCHES;
+use crate::gpu::{kernel, GpuContext, ItemCount, Kernel, Recorder};
+
+kernel!(pub ROOTS_PHASE: RoundParams = "roots_phase"::"main", [64, 1, 1],
+    [Read, Read, ReadWrite, Read, ReadWrite]);
+
+/// Phases per round at most: each phase counts its roots in a schedule word of its own.
+pub const MAX_PHASES: u32 = 16;
+const _: () = assert!(MAX_PHASES <= MAX_LEVEL_DISPATCHES);
+
+/// The kernel that finds a phase's roots (the treelets are `TreeletRounds`' kernels).
+pub(crate) struct PhasedRounds {
+    roots_phase: Kernel<RoundParams>,
+}
+
+impl PhasedRounds {
+    pub fn new(ctx: &GpuContext) -> Self {
+        Self {
+            roots_phase: Kernel::new(ctx, &ROOTS_PHASE),
+        }
+    }
+
+    /// Records one round in `phases` phases, into the pass "treelets", over a working tree of
+    /// `count` leaves whose counts and costs are set (the first round's schedule) and whose
+    /// schedule is zero. Call `TreeletRounds::reserve` first, with room for every internal node.
+    pub fn record(
+        &self,
+        rec: &mut Recorder<'_>,
+        count: ItemCount<'_>,
+        state: &TreeletState<'_>,
+        rounds: &TreeletRounds,
+        round: &Round,
+        phases: u32,
+    ) {
+        let ctx = rec.ctx;
+        let n = count.capacity();
+        let grid = self.roots_phase.grid(ctx, n);
+        let optimize = rounds.optimize(ctx, round.treelet_size);
+        let limit = count.limit(ctx);
+        let roots = rounds.roots();
+        let mut pass = rec.pass("treelets");
+        for k in 0..phases {
+            let params = RoundParams::phase(n, grid.row_pitch, round, phases, k);
+            pass.dispatch(
+                &self.roots_phase,
+                grid,
+                &params,
+                &[
+                    state.parents,
+                    state.prim_counts,
+                    state.schedule,
+                    limit,
+                    roots,
+                ],
+            );
+            let args = 4 * (SCHEDULE_ARGS + 3 * u64::from(k));
+            pass.dispatch_indirect(
+                optimize,
+                state.schedule,
+                args,
+                &params,
+                &[
+                    state.nodes,
+                    state.parents,
+                    state.prim_counts,
+                    state.costs,
+                    state.schedule,
+                    roots,
+                    rounds.subsets(),
+                    state.next_levels,
+                ],
+            );
+        }
+    }
+}
