@@ -7,7 +7,8 @@
 // at least `phases` levels apart, more than a treelet reaches below its root, so their treelets
 // are disjoint. A workgroup reserves the slots of its roots with one device atomic; the workgroup
 // that finishes last (a ticket that counts on over the round's phases, each a dispatch of the same
-// grid) writes the phase's indirect arguments: a workgroup per 32 treelets.
+// grid) writes the phase's indirect arguments: a workgroup per 32 treelets, or per treelet in a
+// phase of fewer than params.team_below (a team of 32 invocations each, treelets_optimize.wgsl).
 #include "treelet_round.wgsl"
 
 const WORKGROUP: u32 = 64u;
@@ -73,7 +74,9 @@ fn main(
     if lid != 0u {
         return;
     }
-    let groups = (atomicLoad(&schedule[slot]) + OPTIMIZE_WORKGROUP - 1u) / OPTIMIZE_WORKGROUP;
+    let size = atomicLoad(&schedule[slot]);
+    let per_group = select(OPTIMIZE_WORKGROUP, 1u, size < params.team_below);
+    let groups = (size + per_group - 1u) / per_group;
     let y = (groups + MAX_WORKGROUPS_X - 1u) / MAX_WORKGROUPS_X;
     let at = SCHEDULE_ARGS + 3u * slot;
     atomicStore(&schedule[at], select(0u, (groups + y - 1u) / max(y, 1u), y > 0u));

@@ -359,7 +359,7 @@ fn bench_phases_reports_each_count() {
     assert_trbvh_bench_refuses(&["--phases", "6"], "treelet phases must be 7..=16");
     assert_trbvh_bench_refuses(
         &["--phases", "7", "--round-overlap", "6"],
-        "the phased treelet rounds take no overlap and no subtrees",
+        "the phased treelet rounds take no overlap, subtrees",
     );
 }
 

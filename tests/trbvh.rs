@@ -455,9 +455,10 @@ fn a_cheaper_last_round_builds_its_own_tree() {
 
 /// The phased rounds (`TreeletSettings::phases`) on the GPU agree with their CPU twin
 /// (`WorkingTree::optimize_phased`) from the GPU's own LBVH, with every treelet size and a
-/// cheaper last round; they build another tree than the bottom-up rounds (the agreement checks
-/// tolerate near-ties, so they alone would pass a GPU that ignored the phases), within 1 % of
-/// its SAH here.
+/// cheaper last round; teams and the DP's loop form build the same tree as lone invocations; the
+/// phased rounds build another tree than the bottom-up rounds (the agreement checks tolerate
+/// near-ties, so they alone would pass a GPU that ignored the phases), within 1 % of its SAH
+/// here.
 #[test]
 fn phased_rounds_equal_their_cpu_twin() {
     let builder =
@@ -494,6 +495,22 @@ fn phased_rounds_equal_their_cpu_twin() {
     builder.settings = phased(7, 3, 7);
     let by_phase = builder.build_stages(gpu(), &geometry).unwrap();
     assert!(by_phase.lbvh == bottom_up.lbvh, "the same LBVH");
+    // Teams (every phase) and the DP's loop form build the phased tree of lone invocations.
+    for schedule in [
+        RoundSchedule {
+            team_below: Some(u32::MAX),
+            ..RoundSchedule::default()
+        },
+        RoundSchedule {
+            dp: Some(TreeletDp::Loop),
+            ..RoundSchedule::default()
+        },
+    ] {
+        builder.set_schedule(schedule);
+        let other = builder.build_stages(gpu(), &geometry).unwrap();
+        assert!(other.working == by_phase.working, "{schedule:?}");
+    }
+    builder.set_schedule(RoundSchedule::default());
     assert!(
         by_phase.working != bottom_up.working,
         "the phased rounds built the bottom-up rounds' tree"
@@ -1145,6 +1162,14 @@ fn bad_settings_are_errors() {
         },
         RoundSchedule {
             subtree_levels: Some(2),
+            ..RoundSchedule::default()
+        },
+        RoundSchedule {
+            level_dispatches: Some(4),
+            ..RoundSchedule::default()
+        },
+        RoundSchedule {
+            climb_dp: Some(TreeletDp::Loop),
             ..RoundSchedule::default()
         },
     ] {

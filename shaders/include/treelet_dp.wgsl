@@ -23,7 +23,8 @@
 //   5. the next round's level (gamma = params.next_gamma) of every node the treelet finished,
 //      children first: one more than its children's highest, for nodes of at least next_gamma
 //      primitives. Each such node is a root of this round or an internal node of one of its
-//      treelets, finished after its children, so the next round needs no climb for its levels.
+//      treelets, finished after its children, so the next round needs no climb for its levels
+//      (none without a next round).
 // The CPU twin is `WorkingTree::optimize_treelet` (same operations in the same order; costs agree
 // to a few ulps where the GPU fuses Ci·a into the following add).
 // The including kernel declares `params: RoundParams` (treelet_round.wgsl), `nodes:
@@ -197,8 +198,12 @@ fn child_code(part: u32, queued: u32) -> u32 {
 
 // Step 5 after a write-back: the next round's level of each node written, children first, from
 // the treelet leaves' levels (all loaded at once: no load waits for another) and the entries'
-// own; no node data is read back.
+// own; no node data is read back. Nothing without a next round (its levels would all be 0, and
+// nothing reads them: the last round, the overlapped and the phased rounds).
 fn store_next_levels() {
+    if params.next_gamma == NO_NEXT_ROUND {
+        return;
+    }
     var level_of: array<u32, 2u * MAX_TREELET>;
     for (var i = 0u; i < MAX_TREELET; i++) {
         let is_root = i < TREELET_SIZE && leaf_prims[i] >= params.next_gamma;
@@ -217,8 +222,11 @@ fn store_next_levels() {
 }
 
 // Step 5 when the treelet keeps its topology: only the root is new to finish (its children were
-// finished before it).
+// finished before it). Nothing without a next round.
 fn store_root_next_level(root: u32) {
+    if params.next_gamma == NO_NEXT_ROUND {
+        return;
+    }
     var level = 0u;
     if root_prims >= params.next_gamma {
         let l = root_children.x;

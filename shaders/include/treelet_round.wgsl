@@ -31,7 +31,7 @@ struct RoundParams {
     // waves_find.wgsl and waves_optimize.wgsl, the climb's in treelets_climb.wgsl and
     // waves_climb.wgsl (`RoundSchedule::climb_team_below`).
     team_below: u32,
-    // gamma of the next round (0xffffffff: none), whose levels the treelet kernels compute.
+    // gamma of the next round (NO_NEXT_ROUND: none), whose levels the treelet kernels compute.
     next_gamma: u32,
     // level_start(level), computed by the CPU (treelets_optimize: the level dispatched;
     // treelets_climb: level_dispatches + 1).
@@ -54,6 +54,10 @@ struct RoundParams {
     phases: u32,
     residue: u32,
 }
+
+// `RoundParams::next_gamma` of a round without a next one (the last, the overlapped and the
+// phased rounds).
+const NO_NEXT_ROUND: u32 = 0xffffffffu;
 
 // The schedule buffer (u32 words): per level L = 1 ..= MAX_LEVEL_DISPATCHES + 1, the number of
 // treelet roots at L bucketed so far (word L - 1); the ticket of nodes_level.wgsl's workgroups;

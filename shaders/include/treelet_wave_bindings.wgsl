@@ -1,7 +1,7 @@
 // Bindings 0-9 of the kernels that optimize the overlapped rounds' treelets (waves_optimize.wgsl,
 // waves_climb.wgsl): the rounds' parameters, the working tree (nodes, parent links, primitive
 // counts, SAH costs), the next round's levels, which the overlapped rounds do not use
-// (params.next_gamma is u32::MAX: treelet_dp.wgsl stores zeros), and the waves' state
+// (params.next_gamma is NO_NEXT_ROUND: treelet_dp.wgsl stores none), and the waves' state
 // (treelet_waves.wgsl: each node's wave done per round, the candidates' waves, the lists, the
 // counts and tickets).
 #include "bvh_node.wgsl"

@@ -498,12 +498,18 @@ impl TrbvhBuilder {
     ) -> Result<()> {
         self.settings.validate(&self.sah)?;
         self.rounds.schedule.check(self.settings.treelet_size)?;
+        let schedule = &self.rounds.schedule;
         if self.settings.phases.is_some()
-            && (self.rounds.schedule.overlap.is_some() || self.rounds.schedule.subtree_levels() > 0)
+            && (schedule.overlap.is_some()
+                || schedule.subtree_levels() > 0
+                || schedule.level_dispatches.is_some()
+                || schedule.climb_team_below.is_some()
+                || schedule.climb_dp.is_some())
         {
             return Err(Error::InvalidArgument(
-                "the phased treelet rounds take no overlap and no subtrees (a phase is one \
-                 dispatch of every root at its depths): drop the phases or those schedule options"
+                "the phased treelet rounds take no overlap, subtrees, level dispatches or climb \
+                 options (a phase is one dispatch of every root at its depths, and there is no \
+                 climb): drop the phases or those schedule options"
                     .into(),
             ));
         }

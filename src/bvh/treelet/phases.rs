@@ -4,7 +4,8 @@
 //! here each round takes P phases instead, phase k optimizing every root whose depth is ≡
 //! P − 1 − k (mod P) in the tree the phases before left: a `roots_phase` dispatch finds them
 //! (each root walks up to the tree's root) and buckets them with the phase's indirect arguments,
-//! then a `treelets_optimize` dispatch optimizes them, one invocation each. Roots of a phase lie
+//! then a `treelets_optimize` dispatch optimizes them, one invocation each (a team of 32 each in a
+//! phase of fewer than `RoundSchedule::team_below`). Roots of a phase lie
 //! at least P levels apart, more than a treelet reaches below its root, so the phase's treelets
 //! are disjoint. CPU twin: `WorkingTree::optimize_phased`.
 
@@ -47,11 +48,12 @@ impl PhasedRounds {
         let n = count.capacity();
         let grid = self.roots_phase.grid(ctx, n);
         let optimize = rounds.optimize(ctx, round.treelet_size);
+        let team_below = rounds.schedule.team_below();
         let limit = count.limit(ctx);
         let roots = rounds.roots();
         let mut pass = rec.pass("treelets");
         for k in 0..phases {
-            let params = RoundParams::phase(n, grid.row_pitch, round, phases, k);
+            let params = RoundParams::phase(n, grid.row_pitch, round, (phases, k), team_below);
             pass.dispatch(
                 &self.roots_phase,
                 grid,

@@ -108,8 +108,15 @@ impl RoundParams {
     /// The parameters of phase `phase` (from 0) of a round in `phases` phases (`phases`) over a
     /// tree of `n` leaves: `roots_phase` (grid row pitch `row_pitch`) buckets the roots of depth
     /// ≡ phases − 1 − phase in schedule word `phase` (level `phase` + 1), `treelets_optimize`
-    /// optimizes them from slot 0, one invocation each, computing no next levels.
-    pub(crate) fn phase(n: u32, row_pitch: u32, round: &Round, phases: u32, phase: u32) -> Self {
+    /// optimizes them from slot 0, one invocation each (a team each in a phase of fewer than
+    /// `team_below`), computing no next levels.
+    pub(crate) fn phase(
+        n: u32,
+        row_pitch: u32,
+        round: &Round,
+        (phases, phase): (u32, u32),
+        team_below: u32,
+    ) -> Self {
         Self {
             count: n,
             row_pitch,
@@ -121,7 +128,7 @@ impl RoundParams {
             level_dispatches: 0,
             level: phase + 1,
             levels_only: 0,
-            team_below: 0,
+            team_below,
             next_gamma: u32::MAX,
             level_first: 0,
             rounds: 0,
