@@ -72,16 +72,7 @@ impl PhasedRounds {
                 state.schedule,
                 args,
                 &params,
-                &[
-                    state.nodes,
-                    state.parents,
-                    state.prim_counts,
-                    state.costs,
-                    state.schedule,
-                    roots,
-                    rounds.subsets(),
-                    state.next_levels,
-                ],
+                &rounds.treelet_buffers(state),
             );
         }
     }

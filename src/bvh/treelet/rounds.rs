@@ -557,18 +557,8 @@ impl TreeletRounds {
         if round.gamma == u32::MAX {
             return;
         }
-        let roots = self.roots();
         let optimize = self.optimize(ctx, round.treelet_size);
-        let treelet_buffers = [
-            state.nodes,
-            state.parents,
-            state.prim_counts,
-            state.costs,
-            state.schedule,
-            roots,
-            &self.subsets,
-            state.next_levels,
-        ];
+        let treelet_buffers = self.treelet_buffers(state);
         // The GPU's u32 sum wraps; truncating the exact sum gives the same word.
         let first_slot = |level: u32| level_start(n, round.gamma, level) as u32;
         let subtree_levels = params.subtree_levels;
@@ -597,6 +587,21 @@ impl TreeletRounds {
             .get(ctx, round.treelet_size, self.schedule.climb_dp());
         rec.pass("treelets climb")
             .dispatch(climb, Grid::workgroups(1, 1), &params, &climb_buffers);
+    }
+
+    /// The buffers `treelets_optimize` binds (and `treelets_climb` first): the working tree, the
+    /// schedule, the roots, the teams' subsets and the next round's levels.
+    pub(crate) fn treelet_buffers<'b>(&'b self, state: &TreeletState<'b>) -> [&'b wgpu::Buffer; 8] {
+        [
+            state.nodes,
+            state.parents,
+            state.prim_counts,
+            state.costs,
+            state.schedule,
+            self.roots(),
+            &self.subsets,
+            state.next_levels,
+        ]
     }
 
     /// `treelets_optimize` for treelets of `treelet_size` leaves, with the DP form of the
