@@ -122,9 +122,15 @@ impl Builder {
     /// "trbvh n=7 r=3" style label for reports ("trbvh n=7 r=3 last=5" with a last round of
     /// other treelets).
     pub fn label(self) -> String {
-        let last = |s: TreeletSettings| match s.last_round_treelets() {
-            Some(size) if !s.one_treelet_size() => format!(" last={size}"),
-            _ => String::new(),
+        let last = |s: TreeletSettings| {
+            let last = match s.last_round_treelets() {
+                Some(size) if !s.one_treelet_size() => format!(" last={size}"),
+                _ => String::new(),
+            };
+            match s.phases {
+                Some(phases) => format!("{last} p={phases}"),
+                None => last,
+            }
         };
         match self {
             Builder::Trbvh(s) => format!("trbvh n={} r={}{}", s.treelet_size, s.rounds, last(s)),

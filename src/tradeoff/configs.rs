@@ -1,7 +1,7 @@
 //! The builder configurations a trade-off study compares, derived from `Builder::ALL` by name so
 //! that builders added later (e.g. `sbvh`, `trbvh-split`) join the study without changes here:
-//! `trbvh` is swept over treelet sizes × rounds, `trbvh-split` over split budgets β (the paper's
-//! n = 7, 3 rounds), and every other builder in `Builder::ALL` takes part once with its listed
+//! `trbvh` is swept over treelet sizes × rounds (and takes part once with phased rounds),
+//! `trbvh-split` over split budgets β (the paper's n = 7, 3 rounds), and every other builder in `Builder::ALL` takes part once with its listed
 //! settings. GPU builders come first, then the CPU references.
 
 use crate::bvh::treelet::TreeletSettings;
@@ -13,6 +13,13 @@ pub const TREELET_SIZES: [u32; 3] = [5, 7, 8];
 pub const ROUNDS: [u32; 3] = [1, 2, 3];
 /// Pre-splitting budgets β (percent) swept for `trbvh-split`.
 pub const SPLIT_PERCENTS: [u32; 3] = [10, 30, 50];
+/// The phased rounds `trbvh` also takes part with (`TreeletSettings::phases`): 7 leaves, 4 rounds
+/// of 7 phases, the cheapest phased setting within 1 % of the paper's SAH on the shared scenes.
+pub const PHASED: TreeletSettings = TreeletSettings {
+    rounds: 4,
+    phases: Some(7),
+    ..TreeletSettings::BALANCED
+};
 
 /// The configurations to measure. `quick` keeps one `trbvh` setting (`TreeletSettings::FAST`)
 /// and `trbvh-split` with its listed budget instead of the sweeps, for tests and previews.
@@ -55,6 +62,7 @@ fn variants(builder: Builder, quick: bool) -> Vec<Builder> {
                 })
             })
         })
+        .chain([builder.with_treelet_settings(PHASED)])
         .collect()
 }
 
@@ -73,7 +81,7 @@ mod tests {
             );
         }
         let trbvh = configs.iter().filter(|c| c.name() == "trbvh").count();
-        assert_eq!(trbvh, TREELET_SIZES.len() * ROUNDS.len());
+        assert_eq!(trbvh, TREELET_SIZES.len() * ROUNDS.len() + 1);
         let split = configs.iter().filter(|c| c.name() == "trbvh-split").count();
         if Builder::ALL.iter().any(|b| b.name() == "trbvh-split") {
             assert_eq!(split, SPLIT_PERCENTS.len());
