@@ -1,0 +1,72 @@
+//! What the phased treelet rounds (`TreeletSettings::phases`: each round in P phases by depth
+//! instead of bottom-up) cost in tree quality, measured on the CPU twin
+//! (`WorkingTree::optimize_phased`, whose trees the GPU builds exactly) from the LBVH of 32-bit
+//! keys that trbvh builds: per scene, rounds and P, the SAH of the collapsed tree against the
+//! paper's bottom-up rounds (7 leaves, 3 rounds), and the dependent steps a GPU takes (P per
+//! round, against the bottom-up rounds' treelet levels, each waiting for the one below).
+//!
+//! ```text
+//! cargo run --release --example phased_rounds -- conference,sibenik 7,14 3,4
+//! ```
+use treelet::bvh::lbvh::{build_lbvh_from_boxes_cpu, prim_boxes_cpu, TRBVH_KEY_BITS};
+use treelet::bvh::treelet::{optimize_lbvh_cpu, CostModel, TreeletSettings, WorkingTree};
+use treelet::bvh::{sah_cost, SahParams};
+use treelet::scene::load_scene;
+
+/// The comma-separated numbers of `text`, or of `default` without it.
+fn numbers(text: Option<String>, default: &str) -> Vec<u32> {
+    text.unwrap_or_else(|| default.into())
+        .split(',')
+        .filter_map(|v| v.parse().ok())
+        .collect()
+}
+
+fn main() -> treelet::Result<()> {
+    let mut args = std::env::args().skip(1);
+    let scenes = args.next().unwrap_or_else(|| "cornell,field-10k".into());
+    let phase_counts = numbers(args.next(), "7");
+    let round_counts = numbers(args.next(), "3,4");
+    let sah = SahParams::default();
+    let model = CostModel::from(&sah);
+    let paper = TreeletSettings::BALANCED;
+    println!("scene            rounds  phases  SAH          vs bottom-up  steps");
+    for name in scenes.split(',') {
+        let scene = load_scene(name)?;
+        let (lbvh, parents) =
+            build_lbvh_from_boxes_cpu(&prim_boxes_cpu(&scene.triangles), TRBVH_KEY_BITS);
+        let lbvh = WorkingTree::from_lbvh(lbvh, parents);
+        // The bottom-up rounds, each round's treelet levels counted on the tree it starts from.
+        let mut tree = lbvh.clone();
+        let mut levels = 0;
+        for (round, &gamma) in paper.gammas().iter().enumerate() {
+            levels += tree.treelet_levels(gamma).1.into_iter().max().unwrap_or(0);
+            tree.optimize_round(&model, paper.round_size(round), gamma);
+        }
+        let reference = sah_cost(&tree.collapse(&model, None), &sah);
+        println!(
+            "{name:16} {:6}  {:>6}  {reference:<11.4}  {:>12}  {levels:5}",
+            paper.rounds, "-", "-"
+        );
+        for &rounds in &round_counts {
+            for &phases in &phase_counts {
+                let settings = TreeletSettings {
+                    rounds,
+                    phases: Some(phases),
+                    ..paper
+                };
+                if let Err(error) = settings.validate(&sah) {
+                    println!("{name:16} {rounds:6}  {phases:6}  {error}");
+                    continue;
+                }
+                let phased = optimize_lbvh_cpu(lbvh.clone(), &settings, &model);
+                let cost = sah_cost(&phased.collapse(&model, None), &sah);
+                println!(
+                    "{name:16} {rounds:6}  {phases:6}  {cost:<11.4}  {:>+11.2}%  {:5}",
+                    (cost / reference - 1.0) * 100.0,
+                    rounds * phases
+                );
+            }
+        }
+    }
+    Ok(())
+}
