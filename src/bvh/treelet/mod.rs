@@ -4,8 +4,9 @@
 //!
 //! Per build, recorded into one recording: the GPU LBVH (`bvh::lbvh`) into a working tree,
 //! `rounds` restructuring rounds (`rounds`: level by level, kernels `nodes_level`,
-//! `treelets_optimize`, `treelets_climb`; γ = treelet size, doubling each round), the collapse
-//! into the output tree (`collapse`: kernels `nodes_mark`, `nodes_compact`).
+//! `treelets_optimize`, `treelets_climb`; γ = treelet size, doubling each round; or overlapped in
+//! waves, `waves`; or each round in phases by depth, `phases`), the collapse into the output tree
+//! (`collapse`: kernels `nodes_mark`, `nodes_compact`).
 //! Each part has a CPU twin (`build_trbvh_cpu`), the test oracle.
 
 mod collapse;
@@ -80,9 +81,9 @@ pub struct TreeletSettings {
     /// Each round in P phases by depth instead of bottom-up, P at least every round's treelet
     /// size: phase k optimizes the roots whose depth is ≡ P − 1 − k (mod P), depths as the
     /// phases before left them (`WorkingTree::optimize_phased`). Not the paper's order, so not
-    /// its tree: a round is P dispatches of many treelets each, not one per treelet level
-    /// (20-37 on the shared scenes, most of them a few treelets waiting on one another). None:
-    /// the paper's bottom-up rounds.
+    /// its tree: a round is P phases (two dispatches each) of many treelets each, not a step per
+    /// treelet level (20-37 on the shared scenes, most of them a few treelets waiting on one
+    /// another). None: the paper's bottom-up rounds.
     pub phases: Option<u32>,
 }
 

@@ -88,8 +88,8 @@ pub struct RoundParams {
     subtree_width: u32,
     /// Phased rounds (`phases`): the phases per round and the depth residue of the phase's
     /// roots (`roots_phase`); 0 elsewhere.
-    pub(crate) phases: u32,
-    pub(crate) residue: u32,
+    phases: u32,
+    residue: u32,
 }
 const _: () = assert!(std::mem::size_of::<RoundParams>() == 80);
 
