@@ -1,12 +1,13 @@
 //! What the phased treelet rounds (`TreeletSettings::phases`: each round in P phases by depth
 //! instead of bottom-up) cost in tree quality, measured on the CPU twin
 //! (`WorkingTree::optimize_phased`, whose trees the GPU builds exactly) from the LBVH of 32-bit
-//! keys that trbvh builds: per scene, rounds and P, the SAH of the collapsed tree against the
-//! paper's bottom-up rounds (7 leaves, 3 rounds), and the dependent steps a GPU takes (P per
-//! round, against the bottom-up rounds' treelet levels, each waiting for the one below).
+//! keys that trbvh builds: per scene, rounds, P and the first round's P, the SAH of the collapsed
+//! tree against the paper's bottom-up rounds (7 leaves, 3 rounds), and the dependent steps a GPU
+//! takes (the phases, against the bottom-up rounds' treelet levels, each waiting for the one
+//! below).
 //!
 //! ```text
-//! cargo run --release --example phased_rounds -- conference,sibenik 7,14 3,4
+//! cargo run --release --example phased_rounds -- conference,sibenik 7,14 3,4 [14]
 //! ```
 use treelet::bvh::lbvh::{build_lbvh_from_boxes_cpu, prim_boxes_cpu, TRBVH_KEY_BITS};
 use treelet::bvh::treelet::{optimize_lbvh_cpu, CostModel, TreeletSettings, WorkingTree};
@@ -26,10 +27,15 @@ fn main() -> treelet::Result<()> {
     let scenes = args.next().unwrap_or_else(|| "cornell,field-10k".into());
     let phase_counts = numbers(args.next(), "7");
     let round_counts = numbers(args.next(), "3,4");
+    // The first round's phases: as the others' where not given.
+    let first_counts: Vec<Option<u32>> = match args.next() {
+        Some(text) => numbers(Some(text), "").into_iter().map(Some).collect(),
+        None => vec![None],
+    };
     let sah = SahParams::default();
     let model = CostModel::from(&sah);
     let paper = TreeletSettings::BALANCED;
-    println!("scene            rounds  phases  SAH          vs bottom-up  steps");
+    println!("scene            rounds  phases  first  SAH          vs bottom-up  steps");
     for name in scenes.split(',') {
         let scene = load_scene(name)?;
         let (lbvh, parents) =
@@ -44,27 +50,31 @@ fn main() -> treelet::Result<()> {
         }
         let reference = sah_cost(&tree.collapse(&model, None), &sah);
         println!(
-            "{name:16} {:6}  {:>6}  {reference:<11.4}  {:>12}  {levels:5}",
-            paper.rounds, "-", "-"
+            "{name:16} {:6}  {:>6}  {:>5}  {reference:<11.4}  {:>12}  {levels:5}",
+            paper.rounds, "-", "-", "-"
         );
         for &rounds in &round_counts {
             for &phases in &phase_counts {
-                let settings = TreeletSettings {
-                    rounds,
-                    phases: Some(phases),
-                    ..paper
-                };
-                if let Err(error) = settings.validate(&sah) {
-                    println!("{name:16} {rounds:6}  {phases:6}  {error}");
-                    continue;
+                for &first_round_phases in &first_counts {
+                    let settings = TreeletSettings {
+                        rounds,
+                        phases: Some(phases),
+                        first_round_phases,
+                        ..paper
+                    };
+                    let first = settings.round_phases(0).unwrap_or(phases);
+                    if let Err(error) = settings.validate(&sah) {
+                        println!("{name:16} {rounds:6}  {phases:6}  {first:5}  {error}");
+                        continue;
+                    }
+                    let phased = optimize_lbvh_cpu(lbvh.clone(), &settings, &model);
+                    let cost = sah_cost(&phased.collapse(&model, None), &sah);
+                    println!(
+                        "{name:16} {rounds:6}  {phases:6}  {first:5}  {cost:<11.4}  {:>+11.2}%  {:5}",
+                        (cost / reference - 1.0) * 100.0,
+                        first + (rounds - 1) * phases
+                    );
                 }
-                let phased = optimize_lbvh_cpu(lbvh.clone(), &settings, &model);
-                let cost = sah_cost(&phased.collapse(&model, None), &sah);
-                println!(
-                    "{name:16} {rounds:6}  {phases:6}  {cost:<11.4}  {:>+11.2}%  {:5}",
-                    (cost / reference - 1.0) * 100.0,
-                    rounds * phases
-                );
             }
         }
     }

@@ -151,19 +151,22 @@ teams() {
 }
 export -f teams
 # The phased rounds (`--phases`, README "Phased rounds"): each round in 7 phases by depth instead
-# of its 20-37 treelet levels bottom-up, with 3 rounds (SAH +0.0 to +1.0 % on the shared scenes)
-# and 4 (-0.5 to +0.6 %), beside the bottom-up rounds, all untuned; the whole build, its
-# treelet stages and SAH. Then teams of 32 per treelet in phases below 2048 treelets and in every
-# phase (the same tree): a phase holds thousands of treelets, where the lone DP's throughput
-# matters more than one treelet's latency.
+# of its 20-37 treelet levels bottom-up, the first round in 7 or 14 (SAH -0.3 to +0.35 % from the
+# paper's trees on the shared scenes with 14, 28 phases in all), beside the bottom-up rounds, all
+# untuned; the whole build, its treelet stages and SAH; 4 rounds of 7 on two scenes. Then teams
+# of 32 per treelet in phases below 2048 treelets and in every phase (the same tree): a phase
+# holds thousands of treelets, where the lone DP's throughput matters more than one treelet's
+# latency.
 phases() {
   for s in ${PHASE_SCENES:-conference crytek_sponza sibenik lost_empire field:224 field:707 field:2000}; do
-    timeout 40 $TREELET bench --scene $s --builder trbvh,trbvh-split --phases 0,7 --rounds 3,4 \
+    timeout 40 $TREELET bench --scene $s --builder trbvh,trbvh-split --phases 0,7 --first-round-phases 7,14 \
       --tune-schedule off $small >> $res/phases.jsonl
   done
-  for s in conference sibenik field:707; do
-    timeout 30 $TREELET bench --scene $s --builder trbvh --phases 7 --rounds 4 --team-below 0,2048,4294967295 \
-      --tune-schedule off $small >> $res/phases.jsonl
+  for s in conference field:707; do
+    timeout 20 $TREELET bench --scene $s --builder trbvh --phases 7 --rounds 4 --tune-schedule off $small \
+      >> $res/phases.jsonl
+    timeout 30 $TREELET bench --scene $s --builder trbvh --phases 7 --first-round-phases 14 \
+      --team-below 0,2048,4294967295 --tune-schedule off $small >> $res/phases.jsonl
   done
 }
 export -f phases
@@ -232,8 +235,8 @@ def round_rows(name, title, columns):
               f" {r['dispatches']:4} {r.get('sah') or 0:.4f}")
 round_rows("subtrees.jsonl", "builder, subtree levels, width, level dispatches asked",
            [("builder", 11), ("subtree_levels", 2), ("subtree_width", 4), ("level_dispatches", 4)])
-round_rows("phases.jsonl", "builder, rounds, phases, teams below",
-           [("builder", 11), ("rounds", 2), ("phases", 4), ("team_below", 10)])
+round_rows("phases.jsonl", "builder, rounds, phases, first round's, teams below",
+           [("builder", 11), ("rounds", 2), ("phases", 4), ("first_round_phases", 4), ("team_below", 10)])
 round_rows("teams.jsonl", "overlap, teams below (levels), (climb)",
            [("round_overlap", 4), ("team_below", 5), ("climb_team_below", 3)])
 print("indirect.jsonl: scene, builder, layout, indirect validation, turn, build ms (min/median/max), wide ms,"

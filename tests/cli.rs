@@ -342,6 +342,10 @@ fn bench_last_round_size_reports_each_size() {
 fn bench_phases_reports_each_count() {
     let records = quick_bench("lbvh,trbvh", &["--phases", "0,7"]);
     assert_eq!(u64_values(&records, "phases"), [None, None, Some(7)]);
+    assert_eq!(
+        u64_values(&records, "first_round_phases"),
+        [None, None, Some(7)]
+    );
     assert!(records.iter().all(|r| r["valid"] == true), "{records:?}");
     let (bottom_up, phased) = (
         records[1]["sah"].as_f64().unwrap(),
@@ -357,6 +361,14 @@ fn bench_phases_reports_each_count() {
         records[2]
     );
     assert_trbvh_bench_refuses(&["--phases", "6"], "treelet phases must be 7..=16");
+    // First-round phases apply to the phased variants of a sweep; alone they are refused.
+    let records = quick_bench("trbvh", &["--phases", "0,7", "--first-round-phases", "14"]);
+    assert_eq!(u64_values(&records, "phases"), [None, Some(7)]);
+    assert_eq!(u64_values(&records, "first_round_phases"), [None, Some(14)]);
+    assert_trbvh_bench_refuses(
+        &["--first-round-phases", "14"],
+        "first-round phases need phased rounds",
+    );
     assert_trbvh_bench_refuses(
         &["--phases", "7", "--round-overlap", "6"],
         "the phased treelet rounds take no overlap, subtrees",

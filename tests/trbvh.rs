@@ -129,6 +129,7 @@ fn dp_equals_brute_force_on_gpu() {
                     split_percent: 0,
                     last_round_size: None,
                     phases: None,
+                    first_round_phases: None,
                 };
                 builder.sah = SahParams {
                     max_leaf_size,
@@ -420,6 +421,7 @@ fn gpu_optimizer_equals_cpu_twin() {
             split_percent: 0,
             last_round_size: None,
             phases: None,
+            first_round_phases: None,
         },
         SahParams {
             max_leaf_size: 4,
@@ -454,8 +456,8 @@ fn a_cheaper_last_round_builds_its_own_tree() {
 }
 
 /// The phased rounds (`TreeletSettings::phases`) on the GPU agree with their CPU twin
-/// (`WorkingTree::optimize_phased`) from the GPU's own LBVH, with every treelet size and a
-/// cheaper last round; teams and the DP's loop form build the same tree as lone invocations; the
+/// (`WorkingTree::optimize_phased`) from the GPU's own LBVH, with every treelet size, a cheaper
+/// last round and more phases in the first round; teams and the DP's loop form build the same tree as lone invocations; the
 /// phased rounds build another tree than the bottom-up rounds (the agreement checks tolerate
 /// near-ties, so they alone would pass a GPU that ignored the phases), within 1 % of its SAH
 /// here.
@@ -487,6 +489,24 @@ fn phased_rounds_equal_their_cpu_twin() {
         TreeletSettings {
             last_round_size: Some(5),
             ..phased(7, 3, 7)
+        },
+    );
+    // More phases in the first round, and the last round's smaller treelets in fewer phases.
+    check_gpu_against_cpu(
+        builder,
+        random_soup(2500, 46),
+        TreeletSettings {
+            first_round_phases: Some(14),
+            ..phased(7, 3, 7)
+        },
+    );
+    check_gpu_against_cpu(
+        builder,
+        random_soup(1500, 47),
+        TreeletSettings {
+            last_round_size: Some(5),
+            first_round_phases: Some(9),
+            ..phased(7, 2, 7)
         },
     );
     let geometry = Geometry::upload(gpu(), &scene_of(random_soup(2500, 45))).unwrap();
@@ -574,6 +594,7 @@ fn subtrees_build_the_tree_of_the_levels_one_by_one() {
                 split_percent: 0,
                 last_round_size: None,
                 phases: None,
+                first_round_phases: None,
             },
         ),
     ];
@@ -663,6 +684,7 @@ fn teams_lone_invocations_and_dp_forms_build_the_same_tree() {
             split_percent: 0,
             last_round_size: None,
             phases: None,
+            first_round_phases: None,
         };
         builder.settings = settings;
         for levels in [None, Some(0)] {
@@ -1101,6 +1123,7 @@ fn bad_settings_are_errors() {
             split_percent: 0,
             last_round_size: Some(4),
             phases: None,
+            first_round_phases: None,
         },
         // Phases fewer than the treelet size (the treelets of a phase could share nodes), or
         // more than the schedule has words for.
@@ -1115,6 +1138,16 @@ fn bad_settings_are_errors() {
         },
         TreeletSettings {
             phases: Some(MAX_PHASES + 1),
+            ..TreeletSettings::BALANCED
+        },
+        // First-round phases without phased rounds, or too few for the first round's treelets.
+        TreeletSettings {
+            first_round_phases: Some(14),
+            ..TreeletSettings::BALANCED
+        },
+        TreeletSettings {
+            phases: Some(7),
+            first_round_phases: Some(6),
             ..TreeletSettings::BALANCED
         },
     ] {

@@ -127,9 +127,12 @@ impl Builder {
                 Some(size) if !s.one_treelet_size() => format!(" last={size}"),
                 _ => String::new(),
             };
-            match s.phases {
-                Some(phases) => format!("{last} p={phases}"),
-                None => last,
+            match (s.phases, s.round_phases(0)) {
+                (Some(phases), Some(first)) if first != phases => {
+                    format!("{last} p={first},{phases}")
+                }
+                (Some(phases), _) => format!("{last} p={phases}"),
+                _ => last,
             }
         };
         match self {

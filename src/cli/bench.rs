@@ -301,6 +301,8 @@ struct BenchRecord {
     last_round_size: Option<u32>,
     /// Treelet builders: the phases per round (`--phases`; null: bottom-up, the paper's order).
     phases: Option<u32>,
+    /// Treelet builders with phased rounds: the first round's phases in effect.
+    first_round_phases: Option<u32>,
     split_budget: Option<f64>,
     /// Treelet builders: the levels per round given a dispatch (null: from the tree's size, per
     /// round) and the team thresholds in effect in the dispatched levels and in the climb.
@@ -625,6 +627,7 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
                 .treelet_settings()
                 .and_then(|s| s.last_round_treelets()),
             phases: builder.treelet_settings().and_then(|s| s.phases),
+            first_round_phases: builder.treelet_settings().and_then(|s| s.round_phases(0)),
             split_budget: builder
                 .treelet_settings()
                 .map(|s| f64::from(s.split_percent) / 100.0),
@@ -745,6 +748,7 @@ fn labelled_path(path: &Path, label: &str) -> PathBuf {
         .chars()
         .filter_map(|c| match c {
             ' ' => Some('-'),
+            ',' => Some('_'),
             '=' => None,
             c => Some(c),
         })

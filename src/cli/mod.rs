@@ -34,7 +34,7 @@ pub struct Cli {
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Render a scene to a PNG file (headless)
-    Render(render::RenderArgs),
+    Render(Box<render::RenderArgs>),
     /// Build and trace a scene, print one JSON object per builder
     Bench(Box<bench::BenchArgs>),
     /// List the built-in and shared scene names
@@ -85,6 +85,11 @@ pub struct TraceArgs {
     /// comma-separated list
     #[arg(long, value_delimiter = ',')]
     phases: Vec<u32>,
+    /// Phases of the first round of phased trbvh rounds (default: --phases; 14 with --phases 7
+    /// comes closest to the paper's trees); `bench` takes a comma-separated list, which applies
+    /// to the phased variants only
+    #[arg(long, value_delimiter = ',')]
+    first_round_phases: Vec<u32>,
     /// Pre-splitting budget β of trbvh-split (extra references per triangle, 0..=1; default 0.3);
     /// `bench` takes a comma-separated list
     #[arg(long, value_delimiter = ',', value_parser = parse_split_budget)]
@@ -111,8 +116,8 @@ fn or_default<T: Copy>(values: &[T]) -> Vec<Option<T>> {
 }
 
 impl TraceArgs {
-    /// Every combination of the requested treelet sizes, rounds, last rounds' sizes and phases
-    /// (the preset's where not given).
+    /// Every combination of the requested treelet sizes, rounds, last rounds' sizes, phases and
+    /// first rounds' phases (the preset's where not given).
     fn treelet_variants(&self) -> Vec<TreeletSettings> {
         let preset = self.preset.unwrap_or(TreeletSettings::BALANCED);
         let mut variants = Vec::new();
@@ -120,13 +125,26 @@ impl TraceArgs {
             for rounds in or_default(&self.rounds) {
                 for last_round_size in or_default(&self.last_round_size) {
                     for phases in or_default(&self.phases) {
-                        variants.push(TreeletSettings {
-                            treelet_size: treelet_size.unwrap_or(preset.treelet_size),
-                            rounds: rounds.unwrap_or(preset.rounds),
-                            split_percent: 0,
-                            last_round_size: last_round_size.or(preset.last_round_size),
-                            phases: phases.map_or(preset.phases, |p| (p > 0).then_some(p)),
-                        });
+                        let phases = phases.map_or(preset.phases, |p| (p > 0).then_some(p));
+                        // The bottom-up variant of a sweep with phased ones once, without
+                        // first-round phases (only phased rounds take them; alone, the settings
+                        // refuse them).
+                        let firsts = if phases.is_none() && self.phases.iter().any(|&p| p > 0) {
+                            vec![None]
+                        } else {
+                            or_default(&self.first_round_phases)
+                        };
+                        for first_round_phases in firsts {
+                            variants.push(TreeletSettings {
+                                treelet_size: treelet_size.unwrap_or(preset.treelet_size),
+                                rounds: rounds.unwrap_or(preset.rounds),
+                                split_percent: 0,
+                                last_round_size: last_round_size.or(preset.last_round_size),
+                                phases,
+                                first_round_phases: first_round_phases
+                                    .or(preset.first_round_phases),
+                            });
+                        }
                     }
                 }
             }
@@ -142,6 +160,7 @@ impl TraceArgs {
             &[
                 ("--treelet-size", !self.treelet_size.is_empty()),
                 ("--phases", !self.phases.is_empty()),
+                ("--first-round-phases", !self.first_round_phases.is_empty()),
                 ("--rounds", !self.rounds.is_empty()),
                 ("--last-round-size", !self.last_round_size.is_empty()),
                 ("--preset", self.preset.is_some()),

@@ -188,22 +188,22 @@ impl WorkingTree {
         sizes
     }
 
-    /// The rounds of `rounds` (treelet size, γ) each in `phases` phases by depth (the GPU's
+    /// The rounds of `rounds` (treelet size, γ, phases P) each in P phases by depth (the GPU's
     /// `TreeletSettings::phases`, module `phases`): counts and costs once, then per round and phase
-    /// k every root (an internal node of at least γ primitives) at depth ≡ phases − 1 − k (mod
-    /// phases) in the tree the phases before left, its cost first recomputed from its children's.
-    /// Roots of one phase lie at least `phases` levels apart, deeper than a treelet reaches below
-    /// its root (`phases` is at least the treelet size), so their treelets are disjoint and their
-    /// order does not matter. Costs are not refreshed otherwise: a node above a treelet that
+    /// k every root (an internal node of at least γ primitives) at depth ≡ P − 1 − k (mod P) in
+    /// the tree the phases before left, its cost first recomputed from its children's. Roots of
+    /// one phase lie at least P levels apart, deeper than a treelet reaches below its root (P is
+    /// at least the treelet size), so their treelets are disjoint and their order does not
+    /// matter. Costs are not refreshed otherwise: a node above a treelet that
     /// lowered its cost keeps its own until its turn as a root (a node that is no root keeps it,
     /// as the collapse reads it; on the shared scenes the refreshed costs give the same SAH to
     /// four places).
-    pub fn optimize_phased(&mut self, model: &CostModel, rounds: &[(u32, u32)], phases: u32) {
+    pub fn optimize_phased(&mut self, model: &CostModel, rounds: &[(u32, u32, u32)]) {
         self.leaf_costs(model);
         for node in self.post_order() {
             self.finish_node(node, model);
         }
-        for &(treelet_size, gamma) in rounds {
+        for &(treelet_size, gamma, phases) in rounds {
             for k in 0..phases {
                 for root in self.phase_roots(gamma, phases, phases - 1 - k) {
                     self.finish_node(root, model);

@@ -85,6 +85,10 @@ pub struct TreeletSettings {
     /// treelet level (20-37 on the shared scenes, most of them a few treelets waiting on one
     /// another). None: the paper's bottom-up rounds.
     pub phases: Option<u32>,
+    /// Phases of the first round, where the LBVH leaves the most to repair and the order counts
+    /// most (README, "Phased rounds": 14 then 7 is within 0.35 % of the paper's SAH on the shared
+    /// scenes); None: `phases`. Only with `phases`.
+    pub first_round_phases: Option<u32>,
 }
 
 impl TreeletSettings {
@@ -95,6 +99,7 @@ impl TreeletSettings {
         split_percent: 0,
         last_round_size: None,
         phases: None,
+        first_round_phases: None,
     };
     /// The paper's reference setting: treelets of 7 leaves, 3 rounds.
     pub const BALANCED: Self = Self {
@@ -103,6 +108,7 @@ impl TreeletSettings {
         split_percent: 0,
         last_round_size: None,
         phases: None,
+        first_round_phases: None,
     };
     /// Largest treelets the kernel supports, more rounds.
     pub const HIGH_QUALITY: Self = Self {
@@ -111,6 +117,7 @@ impl TreeletSettings {
         split_percent: 0,
         last_round_size: None,
         phases: None,
+        first_round_phases: None,
     };
 
     /// Leaves per treelet of round `round` (from 0).
@@ -118,6 +125,14 @@ impl TreeletSettings {
         match self.last_round_size {
             Some(size) if round + 1 == self.rounds as usize => size,
             _ => self.treelet_size,
+        }
+    }
+
+    /// Phases of round `round` (from 0) in effect; None: the paper's bottom-up rounds.
+    pub fn round_phases(&self, round: usize) -> Option<u32> {
+        match self.first_round_phases {
+            Some(phases) if round == 0 => Some(phases),
+            _ => self.phases,
         }
     }
 
@@ -181,11 +196,25 @@ impl TreeletSettings {
                 self.split_percent
             )));
         }
-        if let Some(phases) = self.phases {
-            let largest = self.treelet_size.max(self.last_round_size.unwrap_or(0));
-            if !(largest..=MAX_PHASES).contains(&phases) {
+        if self.first_round_phases.is_some() && self.phases.is_none() {
+            return Err(Error::InvalidArgument(
+                "first-round phases need phased rounds (treelet phases)".into(),
+            ));
+        }
+        for round in 0..self.rounds as usize {
+            let Some(phases) = self.round_phases(round) else {
+                break;
+            };
+            // A round's treelets reach its treelet size − 1 levels below their roots.
+            let size = self.round_size(round);
+            let which = if round == 0 && self.first_round_phases.is_some() {
+                "first-round treelet phases"
+            } else {
+                "treelet phases"
+            };
+            if !(size..=MAX_PHASES).contains(&phases) {
                 return Err(Error::InvalidArgument(format!(
-                    "treelet phases must be {largest}..={MAX_PHASES} (at least the treelet size: \
+                    "{which} must be {size}..={MAX_PHASES} (at least the round's treelet size: \
                      roots of one phase lie that many levels apart, so their treelets are \
                      disjoint), got {phases}"
                 )));
@@ -268,12 +297,15 @@ pub fn optimize_lbvh_cpu(
     let gammas = settings.gammas();
     match settings.phases {
         Some(phases) if gammas[0] != u32::MAX => {
-            let rounds: Vec<(u32, u32)> = gammas
+            let rounds: Vec<(u32, u32, u32)> = gammas
                 .iter()
                 .enumerate()
-                .map(|(round, &gamma)| (settings.round_size(round), gamma))
+                .map(|(round, &gamma)| {
+                    let phases = settings.round_phases(round).unwrap_or(phases);
+                    (settings.round_size(round), gamma, phases)
+                })
                 .collect();
-            tree.optimize_phased(model, &rounds, phases);
+            tree.optimize_phased(model, &rounds);
         }
         _ => {
             for (round, gamma) in gammas.into_iter().enumerate() {
@@ -623,6 +655,7 @@ impl TrbvhBuilder {
                 drop(pass);
                 for r in 0..gammas.len() {
                     rec.encoder().clear_buffer(&scratch.schedule, 0, None);
+                    let phases = settings.round_phases(r).unwrap_or(phases);
                     self.phased
                         .record(rec, count, &state, &self.rounds, &round(r), phases);
                 }

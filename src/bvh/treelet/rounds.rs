@@ -795,6 +795,7 @@ mod tests {
                     split_percent: 0,
                     last_round_size: None,
                     phases: None,
+                    first_round_phases: None,
                 };
                 let tree = optimize_lbvh_cpu(lbvh.clone(), &settings, &model);
                 for gamma in [3u32, 5, 7, 14, 28, 56] {
