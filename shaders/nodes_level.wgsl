@@ -35,7 +35,6 @@
 override WORKGROUP_WIDTH: u32 = 64u;
 // Workgroup size of treelets_optimize.wgsl.
 const OPTIMIZE_WORKGROUP: u32 = 32u;
-const MAX_WORKGROUPS_X: u32 = 65535u;
 
 @group(0) @binding(0) var<uniform> params: RoundParams;
 @group(0) @binding(1) var<storage, read_write> node_words: array<atomic<u32>>;
@@ -200,11 +199,11 @@ fn write_dispatch_args(lid: u32) {
                 groups += (atomicLoad(&schedule[l - 1u]) + per - 1u) / per;
             }
         }
-        let y = (groups + MAX_WORKGROUPS_X - 1u) / MAX_WORKGROUPS_X;
+        let args = dispatch_args(groups);
         let at = SCHEDULE_ARGS + 3u * (level - 1u);
-        atomicStore(&schedule[at], select(0u, (groups + y - 1u) / max(y, 1u), y > 0u));
-        atomicStore(&schedule[at + 1u], y);
-        atomicStore(&schedule[at + 2u], 1u);
+        atomicStore(&schedule[at], args.x);
+        atomicStore(&schedule[at + 1u], args.y);
+        atomicStore(&schedule[at + 2u], args.z);
     }
 }
 

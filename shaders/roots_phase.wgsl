@@ -14,7 +14,6 @@
 const WORKGROUP: u32 = 64u;
 // Workgroup size of treelets_optimize.wgsl.
 const OPTIMIZE_WORKGROUP: u32 = 32u;
-const MAX_WORKGROUPS_X: u32 = 65535u;
 
 @group(0) @binding(0) var<uniform> params: RoundParams;
 @group(0) @binding(1) var<storage, read> parents: array<u32>;
@@ -76,10 +75,9 @@ fn main(
     }
     let size = atomicLoad(&schedule[slot]);
     let per_group = select(OPTIMIZE_WORKGROUP, 1u, size < params.team_below);
-    let groups = (size + per_group - 1u) / per_group;
-    let y = (groups + MAX_WORKGROUPS_X - 1u) / MAX_WORKGROUPS_X;
+    let args = dispatch_args((size + per_group - 1u) / per_group);
     let at = SCHEDULE_ARGS + 3u * slot;
-    atomicStore(&schedule[at], select(0u, (groups + y - 1u) / max(y, 1u), y > 0u));
-    atomicStore(&schedule[at + 1u], y);
-    atomicStore(&schedule[at + 2u], 1u);
+    atomicStore(&schedule[at], args.x);
+    atomicStore(&schedule[at + 1u], args.y);
+    atomicStore(&schedule[at + 2u], args.z);
 }

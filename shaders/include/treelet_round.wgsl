@@ -65,6 +65,17 @@ const NO_NEXT_ROUND: u32 = 0xffffffffu;
 const SCHEDULE_TICKET: u32 = MAX_LEVEL_DISPATCHES + 1u;
 const SCHEDULE_ARGS: u32 = MAX_LEVEL_DISPATCHES + 2u;
 
+// Workgroups one row of a dispatch holds at most.
+const MAX_WORKGROUPS_X: u32 = 65535u;
+
+// The indirect arguments (x, y, z) of a dispatch of `groups` workgroups: rows of at most
+// MAX_WORKGROUPS_X (the treelet kernels number a workgroup wid.x + wid.y · x and skip those past
+// their count).
+fn dispatch_args(groups: u32) -> vec3<u32> {
+    let y = (groups + MAX_WORKGROUPS_X - 1u) / MAX_WORKGROUPS_X;
+    return vec3<u32>(select(0u, (groups + y - 1u) / max(y, 1u), y > 0u), y, 1u);
+}
+
 // First slot of level `level`'s roots in the roots buffer (twin: `level_start` in
 // src/bvh/treelet/rounds.rs). Level l has ⌊count / (gamma + l - 1)⌋ slots: the roots of a level
 // are disjoint subtrees, and a root of level l holds at least gamma + l - 1 leaves (gamma, and

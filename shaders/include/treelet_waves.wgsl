@@ -38,7 +38,6 @@ const WAITING: u32 = 2u;
 
 // The invocations of a wave dispatch's workgroup (each takes one entry).
 const WAVE_WORKGROUP: u32 = 32u;
-const MAX_WORKGROUPS_X: u32 = 65535u;
 
 var<workgroup> state_value: u32;
 
@@ -171,7 +170,5 @@ fn find_candidate(entry: u32, wave: u32) {
 
 // The indirect arguments (x, y, z) of a dispatch over `items` entries, `per_group` per workgroup.
 fn wave_args(items: u32, per_group: u32) -> vec3<u32> {
-    let groups = (items + per_group - 1u) / per_group;
-    let y = (groups + MAX_WORKGROUPS_X - 1u) / MAX_WORKGROUPS_X;
-    return vec3<u32>(select(0u, (groups + y - 1u) / max(y, 1u), y > 0u), y, 1u);
+    return dispatch_args((items + per_group - 1u) / per_group);
 }
