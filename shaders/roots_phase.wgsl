@@ -1,9 +1,15 @@
 // Phased treelet rounds (`TreeletSettings::phases`; CPU twin `WorkingTree::optimize_phased`): the
 // roots of one phase. Invocation j takes internal node j; if it roots a treelet (at least gamma
-// primitives) it walks up the parent links to the tree's root, and a node at depth ≡
+// primitives) it walks up the parent links towards the tree's root, and a node at depth ≡
 // params.residue (mod params.phases) goes into the phase's bucket: schedule word params.level − 1,
 // roots from slot 0 (the phase's treelets_optimize dispatch reads them there). The tree is the one
-// the phases before left (a dispatch boundary orders memory: plain loads). Roots of one phase lie
+// the phases before left (a dispatch boundary orders memory: plain loads). Every root publishes
+// its depth (mod phases) once it knows it, and a walk stops at the first ancestor that has
+// published: an ancestor of a root is a root, so the walks of one phase share their upper parts
+// (on a GPU, where all walk at once, a walk ends about halfway up). Published depths are exact
+// whichever walker got there first, so the phase's roots are too: the same tree every time.
+// Phase k publishes in half k mod 2 of `depths` and zeroes the other half for phase k + 1 (the
+// round starts with both zero). Roots of one phase lie
 // at least `phases` levels apart, more than a treelet reaches below its root, so their treelets
 // are disjoint. A workgroup reserves the slots of its roots with one device atomic; the workgroup
 // that finishes last (a ticket that counts on over the round's phases, each a dispatch of the same
@@ -22,6 +28,9 @@ const OPTIMIZE_WORKGROUP: u32 = 32u;
 // The item count's limit (`gpu::ItemCount`): the tree has min(params.count, count_limit[0]) leaves.
 @group(0) @binding(4) var<storage, read> count_limit: array<u32>;
 @group(0) @binding(5) var<storage, read_write> roots: array<u32>;
+// Two halves of params.count words: per internal node 0 (not known yet) or its depth mod phases
+// + 1, published this phase (half k mod 2) and zeroed for the next (the other half).
+@group(0) @binding(6) var<storage, read_write> depths: array<atomic<u32>>;
 
 var<workgroup> workgroup_roots: atomic<u32>;
 var<workgroup> workgroup_first: u32;
@@ -35,13 +44,29 @@ fn main(
 ) {
     let j = gid.x + gid.y * params.row_pitch;
     let n = min(params.count, count_limit[0]);
+    let phase = params.phases - 1u - params.residue;
+    let published = (phase % 2u) * params.count;
+    let next = params.count - published;
     var takes = false;
-    if j + 1u < n && prim_counts[j] >= params.gamma {
-        var depth = 0u;
-        for (var node = j; node != 0u; node = parents[node]) {
-            depth++;
+    if j + 1u < n {
+        atomicStore(&depths[next + j], 0u);
+        if prim_counts[j] >= params.gamma {
+            // Steps up to the tree's root (depth 0), or to an ancestor of known depth.
+            var steps = 0u;
+            var known = 0u;
+            var node = j;
+            while node != 0u {
+                known = atomicLoad(&depths[published + node]);
+                if known != 0u {
+                    break;
+                }
+                node = parents[node];
+                steps++;
+            }
+            let residue = (select(0u, known - 1u, known != 0u) + steps) % params.phases;
+            atomicStore(&depths[published + j], residue + 1u);
+            takes = residue == params.residue;
         }
-        takes = depth % params.phases == params.residue;
     }
     let slot = params.level - 1u;
     var rank = 0u;

@@ -612,6 +612,9 @@ impl TrbvhBuilder {
         let gammas = self.settings.gammas();
         let phases = self.settings.phases.filter(|_| gammas[0] != u32::MAX);
         self.rounds.reserve(ctx, n, &gammas, phases.is_some())?;
+        if phases.is_some() {
+            self.phased.reserve(ctx, n)?;
+        }
         let scratch = self.scratch.as_ref().expect("reserved");
         let mut state = TreeletState {
             nodes: &scratch.nodes,

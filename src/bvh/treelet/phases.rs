@@ -11,30 +11,46 @@
 
 use super::rounds::{Round, RoundParams, TreeletRounds, TreeletState, SCHEDULE_ARGS};
 use crate::gpu::constants::MAX_LEVEL_DISPATCHES;
-use crate::gpu::{kernel, GpuContext, ItemCount, Kernel, Recorder};
+use crate::gpu::{kernel, storage_buffer_zeroed, GpuContext, ItemCount, Kernel, Recorder};
+use crate::Result;
 
 kernel!(pub ROOTS_PHASE: RoundParams = "roots_phase"::"main", [64, 1, 1],
-    [Read, Read, ReadWrite, Read, ReadWrite]);
+    [Read, Read, ReadWrite, Read, ReadWrite, ReadWrite]);
 
 /// Phases per round at most: each phase counts its roots in a schedule word of its own.
 pub const MAX_PHASES: u32 = 16;
 const _: () = assert!(MAX_PHASES <= MAX_LEVEL_DISPATCHES);
 
-/// The kernel that finds a phase's roots (the treelets are `TreeletRounds`' kernels).
+/// The kernel that finds a phase's roots (the treelets are `TreeletRounds`' kernels) and the
+/// depths its walks publish.
 pub(crate) struct PhasedRounds {
     roots_phase: Kernel<RoundParams>,
+    /// Two halves of a word per leaf (`roots_phase.wgsl`); grown on demand.
+    depths: Option<wgpu::Buffer>,
 }
 
 impl PhasedRounds {
     pub fn new(ctx: &GpuContext) -> Self {
         Self {
             roots_phase: Kernel::new(ctx, &ROOTS_PHASE),
+            depths: None,
         }
+    }
+
+    /// Grows the published depths for trees of up to `n` leaves.
+    pub fn reserve(&mut self, ctx: &GpuContext, n: u32) -> Result<()> {
+        let size = 8 * u64::from(n.max(1));
+        if self.depths.as_ref().is_none_or(|d| d.size() < size) {
+            self.depths = None;
+            self.depths = Some(storage_buffer_zeroed(ctx, "treelet phase depths", size)?);
+        }
+        Ok(())
     }
 
     /// Records one round in `phases` phases, into the pass "treelets", over a working tree of
     /// `count` leaves whose counts and costs are set (the first round's schedule) and whose
-    /// schedule is zero. Call `TreeletRounds::reserve` first, with room for every internal node.
+    /// schedule is zero. Call `reserve` and `TreeletRounds::reserve` first, the latter with room
+    /// for every internal node.
     pub fn record(
         &self,
         rec: &mut Recorder<'_>,
@@ -51,6 +67,13 @@ impl PhasedRounds {
         let team_below = rounds.schedule.team_below();
         let limit = count.limit(ctx);
         let roots = rounds.roots();
+        let depths = self
+            .depths
+            .as_ref()
+            .expect("reserve() allocates the depths");
+        // Both halves zero: phase 0 publishes in the first, and zeroes the second for phase 1.
+        rec.encoder()
+            .clear_buffer(depths, 0, Some(8 * u64::from(n)));
         let mut pass = rec.pass("treelets");
         for k in 0..phases {
             let params = RoundParams::phase(n, grid.row_pitch, round, (phases, k), team_below);
@@ -64,6 +87,7 @@ impl PhasedRounds {
                     state.schedule,
                     limit,
                     roots,
+                    depths,
                 ],
             );
             let args = 4 * (SCHEDULE_ARGS + 3 * u64::from(k));
