@@ -49,6 +49,22 @@ pub fn storage_buffer_zeroed(ctx: &GpuContext, label: &str, size: u64) -> Result
     }))
 }
 
+/// Makes `slot` a zero-filled storage buffer of at least `size` bytes: kept if it is one already,
+/// else replaced (the old one dropped first, so both are never held at once; its contents are
+/// not kept).
+pub fn grow_storage_buffer(
+    ctx: &GpuContext,
+    slot: &mut Option<wgpu::Buffer>,
+    label: &str,
+    size: u64,
+) -> Result<()> {
+    if slot.as_ref().is_none_or(|buffer| buffer.size() < size) {
+        *slot = None;
+        *slot = Some(storage_buffer_zeroed(ctx, label, size)?);
+    }
+    Ok(())
+}
+
 /// A uniform buffer holding `value`, updatable with `queue.write_buffer`.
 pub fn uniform_buffer<T: Pod>(ctx: &GpuContext, label: &str, value: &T) -> wgpu::Buffer {
     ctx.device

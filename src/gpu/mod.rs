@@ -19,8 +19,8 @@ mod spread;
 mod timer;
 
 pub use buffers::{
-    bind_entry, indirect_buffer_zeroed, read_buffer, storage_buffer, storage_buffer_zeroed,
-    uniform_buffer,
+    bind_entry, grow_storage_buffer, indirect_buffer_zeroed, read_buffer, storage_buffer,
+    storage_buffer_zeroed, uniform_buffer,
 };
 pub use context::{instance_flags, GpuContext, GpuOptions};
 pub use item_count::ItemCount;

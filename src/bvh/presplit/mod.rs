@@ -35,7 +35,8 @@ use crate::gpu::constants::{
     SPLIT_COUNT_ITEMS, SPLIT_HEAVY_WORD, SPLIT_INLINE_PIECES, SPLIT_SCALE_WORD, SPLIT_SEARCH_STEPS,
 };
 use crate::gpu::{
-    read_buffer, storage_buffer_zeroed, GpuContext, Items, Kernel, ParamSlab, Recorder,
+    grow_storage_buffer, read_buffer, storage_buffer_zeroed, GpuContext, Items, Kernel, ParamSlab,
+    Recorder,
 };
 use crate::sort::PrefixScan;
 use crate::Result;
@@ -149,18 +150,8 @@ impl PreSplitter {
                 )?,
             });
         }
-        if self
-            .ref_tris
-            .as_ref()
-            .is_none_or(|b| b.size() < u64::from(capacity) * 4)
-        {
-            self.ref_tris = None;
-            self.ref_tris = Some(storage_buffer_zeroed(
-                ctx,
-                "reference triangles",
-                u64::from(capacity) * 4,
-            )?);
-        }
+        let ref_tris = u64::from(capacity) * 4;
+        grow_storage_buffer(ctx, &mut self.ref_tris, "reference triangles", ref_tris)?;
         self.scan.reserve(ctx, n, 1)?;
         let s = self.scratch.as_ref().expect("allocated");
         let ref_tris = self.ref_tris.as_ref().expect("allocated");

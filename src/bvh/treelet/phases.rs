@@ -11,7 +11,7 @@
 
 use super::rounds::{Round, RoundParams, TreeletRounds, TreeletState, SCHEDULE_ARGS};
 use crate::gpu::constants::MAX_LEVEL_DISPATCHES;
-use crate::gpu::{kernel, storage_buffer_zeroed, GpuContext, ItemCount, Kernel, Recorder};
+use crate::gpu::{grow_storage_buffer, kernel, GpuContext, ItemCount, Kernel, Recorder};
 use crate::Result;
 
 kernel!(pub ROOTS_PHASE: RoundParams = "roots_phase"::"main", [64, 1, 1],
@@ -40,11 +40,7 @@ impl PhasedRounds {
     /// Grows the published depths for trees of up to `n` leaves.
     pub fn reserve(&mut self, ctx: &GpuContext, n: u32) -> Result<()> {
         let size = 8 * u64::from(n.max(1));
-        if self.depths.as_ref().is_none_or(|d| d.size() < size) {
-            self.depths = None;
-            self.depths = Some(storage_buffer_zeroed(ctx, "treelet phase depths", size)?);
-        }
-        Ok(())
+        grow_storage_buffer(ctx, &mut self.depths, "treelet phase depths", size)
     }
 
     /// Records one round in `phases` phases, into the pass "treelets", over a working tree of

@@ -45,7 +45,7 @@ use crate::gpu::constants::{
     MAX_LEVEL_DISPATCHES, MAX_SUBTREE_LEVELS, MAX_TREELET_SIZE, MIN_TREELET_SIZE, SUBTREE_LIST,
 };
 use crate::gpu::{
-    storage_buffer, storage_buffer_zeroed, GpuContext, Grid, ItemCount, Kernel, KernelDecl, Pass,
+    grow_storage_buffer, storage_buffer, GpuContext, Grid, ItemCount, Kernel, KernelDecl, Pass,
     Recorder,
 };
 use crate::{Error, Result};
@@ -530,11 +530,7 @@ impl TreeletRounds {
             .max()
             .unwrap_or(0)
             .max(if every_internal { u64::from(n) } else { 1 });
-        if self.roots.as_ref().is_none_or(|r| r.size() < words * 4) {
-            self.roots = None;
-            self.roots = Some(storage_buffer_zeroed(ctx, "treelet roots", words * 4)?);
-        }
-        Ok(())
+        grow_storage_buffer(ctx, &mut self.roots, "treelet roots", words * 4)
     }
 
     /// Records one round over a working tree of `count` leaves (LBVH layout) whose schedule is
