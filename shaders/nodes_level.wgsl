@@ -33,8 +33,6 @@
 
 // Invocations per workgroup: 64, or the device's climb width (`Kernel::climb`; 8 on CPU devices).
 override WORKGROUP_WIDTH: u32 = 64u;
-// Workgroup size of treelets_optimize.wgsl.
-const OPTIMIZE_WORKGROUP: u32 = 32u;
 
 @group(0) @binding(0) var<uniform> params: RoundParams;
 @group(0) @binding(1) var<storage, read_write> node_words: array<atomic<u32>>;
@@ -190,8 +188,7 @@ fn write_dispatch_args(lid: u32) {
         let size = atomicLoad(&schedule[level - 1u]);
         // A workgroup per 32 treelets or per team's treelet; with subtrees, level 1's workgroups
         // are those of every level's cut roots (subtrees_optimize.wgsl).
-        let per_group = select(OPTIMIZE_WORKGROUP, 1u, size < params.team_below);
-        var groups = (size + per_group - 1u) / per_group;
+        var groups = optimize_workgroups(size);
         if level == 1u && params.subtree_levels != 0u {
             groups = 0u;
             for (var l = 1u; l <= params.subtree_levels; l++) {

@@ -9,17 +9,14 @@
 // (on a GPU, where all walk at once, a walk ends about halfway up). Published depths are exact
 // whichever walker got there first, so the phase's roots are too: the same tree every time.
 // Phase k publishes in half k mod 2 of `depths` and zeroes the other half for phase k + 1 (the
-// round starts with both zero). Roots of one phase lie
-// at least `phases` levels apart, more than a treelet reaches below its root, so their treelets
-// are disjoint. A workgroup reserves the slots of its roots with one device atomic; the workgroup
-// that finishes last (a ticket that counts on over the round's phases, each a dispatch of the same
-// grid) writes the phase's indirect arguments: a workgroup per 32 treelets, or per treelet in a
-// phase of fewer than params.team_below (a team of 32 invocations each, treelets_optimize.wgsl).
+// round starts with both zero). Roots of one phase lie at least `phases` levels apart, more than
+// a treelet reaches below its root, so their treelets are disjoint. A workgroup reserves the
+// slots of its roots with one device atomic; the workgroup that finishes last (a ticket that
+// counts on over the round's phases, each a dispatch of the same grid) writes the phase's
+// indirect arguments (`optimize_workgroups`, treelet_round.wgsl).
 #include "treelet_round.wgsl"
 
 const WORKGROUP: u32 = 64u;
-// Workgroup size of treelets_optimize.wgsl.
-const OPTIMIZE_WORKGROUP: u32 = 32u;
 
 @group(0) @binding(0) var<uniform> params: RoundParams;
 @group(0) @binding(1) var<storage, read> parents: array<u32>;
@@ -98,9 +95,7 @@ fn main(
     if lid != 0u {
         return;
     }
-    let size = atomicLoad(&schedule[slot]);
-    let per_group = select(OPTIMIZE_WORKGROUP, 1u, size < params.team_below);
-    let args = dispatch_args((size + per_group - 1u) / per_group);
+    let args = dispatch_args(optimize_workgroups(atomicLoad(&schedule[slot])));
     let at = SCHEDULE_ARGS + 3u * slot;
     atomicStore(&schedule[at], args.x);
     atomicStore(&schedule[at + 1u], args.y);

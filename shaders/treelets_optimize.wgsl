@@ -4,7 +4,7 @@
 // smaller level gives each a workgroup, whose 32 invocations share its DP (treelet_team.wgsl). The
 // dispatches of the levels below have finished, so node data is read with plain loads.
 
-const WORKGROUP: u32 = 32u;
+const WORKGROUP: u32 = OPTIMIZE_WORKGROUP;
 const TEAMS: u32 = 1u;
 
 #include "treelet_roots.wgsl"

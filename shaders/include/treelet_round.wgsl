@@ -65,6 +65,16 @@ const NO_NEXT_ROUND: u32 = 0xffffffffu;
 const SCHEDULE_TICKET: u32 = MAX_LEVEL_DISPATCHES + 1u;
 const SCHEDULE_ARGS: u32 = MAX_LEVEL_DISPATCHES + 2u;
 
+// Invocations per workgroup of treelets_optimize.wgsl.
+const OPTIMIZE_WORKGROUP: u32 = 32u;
+
+// Workgroups of a treelets_optimize dispatch over `treelets` treelets: one per OPTIMIZE_WORKGROUP
+// treelets, or one per treelet (its team) where they are fewer than params.team_below.
+fn optimize_workgroups(treelets: u32) -> u32 {
+    let per_group = select(OPTIMIZE_WORKGROUP, 1u, treelets < params.team_below);
+    return (treelets + per_group - 1u) / per_group;
+}
+
 // Workgroups one row of a dispatch holds at most.
 const MAX_WORKGROUPS_X: u32 = 65535u;
 
