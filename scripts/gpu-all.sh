@@ -153,16 +153,21 @@ export -f teams
 # The phased rounds (`--phases`, README "Phased rounds"): each round in 7 phases by depth instead
 # of its 20-37 treelet levels bottom-up, the first round in 7 or 14 (SAH -0.3 to +0.35 % from the
 # paper's trees on the shared scenes with 14, 28 phases in all), beside the bottom-up rounds, all
-# untuned; the whole build, its treelet stages and SAH; 4 rounds of 7 on two scenes. Then teams
-# of 32 per treelet in phases below 2048 treelets and in every phase (the same tree): a phase
-# holds thousands of treelets, where the lone DP's throughput matters more than one treelet's
-# latency.
+# untuned; the whole build, its treelet stages and SAH; then 4 rounds of 4 phases, the first of
+# 5 or 6 (17 or 18 phases; treelets whose leaves stay within 3 levels of their roots, SAH -0.9 to
+# +0.4 %). Then on two scenes 4 rounds of 7, and teams of 32 per treelet in phases below 2048
+# treelets and in every phase (the same tree): a phase holds thousands of treelets, where the
+# lone DP's throughput matters more than one treelet's latency.
 phases() {
   for s in ${PHASE_SCENES:-conference crytek_sponza sibenik lost_empire field:224 field:707 field:2000}; do
     timeout 40 $TREELET bench --scene $s --builder trbvh,trbvh-split --phases 0,7 --first-round-phases 7,14 \
       --tune-schedule off $small >> $res/phases.jsonl
+    timeout 30 $TREELET bench --scene $s --builder trbvh,trbvh-split --rounds 4 --phases 4 --first-round-phases 5,6 \
+      --tune-schedule off $small >> $res/phases.jsonl
   done
   for s in conference field:707; do
+    timeout 30 $TREELET bench --scene $s --builder trbvh --rounds 4 --phases 4 --first-round-phases 5 \
+      --team-below 0,2048,4294967295 --tune-schedule off $small >> $res/phases.jsonl
     timeout 20 $TREELET bench --scene $s --builder trbvh --phases 7 --rounds 4 --tune-schedule off $small \
       >> $res/phases.jsonl
     timeout 30 $TREELET bench --scene $s --builder trbvh --phases 7 --first-round-phases 14 \
@@ -178,7 +183,7 @@ tests() {
 }
 export -f tests
 step tests 150 bash -c tests
-step phases 120 bash -c phases
+step phases 170 bash -c phases
 step teams 150 bash -c teams
 step subtrees 120 bash -c subtrees
 step indirect 150 bash -c indirect

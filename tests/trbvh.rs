@@ -13,7 +13,7 @@ use treelet::bvh::lbvh::{build_lbvh_from_boxes_cpu, prim_boxes_cpu, TRBVH_KEY_BI
 use treelet::bvh::treelet::{
     build_trbvh_cpu, optimize_lbvh_cpu, overlap_reach, solve_treelet, subsets_by_size,
     surface_area, CostModel, RoundSchedule, TrbvhBuilder, TreeletDp, TreeletLeaf, TreeletSettings,
-    WorkingTree, MAX_LEVEL_DISPATCHES, MAX_PHASES, MAX_SUBTREE_LEVELS,
+    WorkingTree, MAX_LEVEL_DISPATCHES, MAX_PHASES, MAX_SUBTREE_LEVELS, MIN_PHASES,
 };
 use treelet::bvh::wide::{validate_wide_with_references, Layout, WideOptions};
 use treelet::bvh::{
@@ -457,7 +457,9 @@ fn a_cheaper_last_round_builds_its_own_tree() {
 
 /// The phased rounds (`TreeletSettings::phases`) on the GPU agree with their CPU twin
 /// (`WorkingTree::optimize_phased`) from the GPU's own LBVH, with every treelet size, a cheaper
-/// last round and more phases in the first round; teams and the DP's loop form build the same tree as lone invocations; the
+/// last round, more phases in the first round and fewer phases than the treelet size (treelets
+/// cut short by the depth bound); teams and the DP's loop form build the same tree as lone
+/// invocations; the
 /// phased rounds build another tree than the bottom-up rounds (the agreement checks tolerate
 /// near-ties, so they alone would pass a GPU that ignored the phases), within 1 % of its SAH
 /// here.
@@ -509,6 +511,21 @@ fn phased_rounds_equal_their_cpu_twin() {
             ..phased(7, 2, 7)
         },
     );
+    // Fewer phases than the treelet size: the formation keeps a treelet's leaves within P − 1
+    // levels of its root, so some treelets have fewer leaves (down to 3 at P = 3).
+    check_gpu_against_cpu(
+        builder,
+        random_soup(2500, 48),
+        TreeletSettings {
+            first_round_phases: Some(5),
+            ..phased(7, 4, 4)
+        },
+    );
+    check_gpu_against_cpu(
+        builder,
+        load_scene("field-10k").unwrap().triangles,
+        phased(8, 3, MIN_PHASES),
+    );
     let geometry = Geometry::upload(gpu(), &scene_of(random_soup(2500, 45))).unwrap();
     builder.settings = TreeletSettings::BALANCED;
     let bottom_up = builder.build_stages(gpu(), &geometry).unwrap();
@@ -534,6 +551,24 @@ fn phased_rounds_equal_their_cpu_twin() {
     assert!(
         by_phase.working != bottom_up.working,
         "the phased rounds built the bottom-up rounds' tree"
+    );
+    // The same with treelets the depth bound cut short, which teams finish from the subsets'
+    // costs of their DP and lone invocations by searching their full set's partition.
+    builder.settings = TreeletSettings {
+        first_round_phases: Some(5),
+        ..phased(7, 4, 4)
+    };
+    let bounded = builder.build_stages(gpu(), &geometry).unwrap();
+    builder.set_schedule(RoundSchedule {
+        team_below: Some(u32::MAX),
+        ..RoundSchedule::default()
+    });
+    let by_teams = builder.build_stages(gpu(), &geometry).unwrap();
+    builder.set_schedule(RoundSchedule::default());
+    assert!(by_teams.working == bounded.working, "teams, P = 4");
+    assert!(
+        bounded.working != by_phase.working,
+        "P = 4 built the tree of P = 7"
     );
     let sah = SahParams::default();
     let (a, b) = (
@@ -1125,29 +1160,24 @@ fn bad_settings_are_errors() {
             phases: None,
             first_round_phases: None,
         },
-        // Phases fewer than the treelet size (the treelets of a phase could share nodes), or
-        // more than the schedule has words for.
+        // Phases too few for a treelet of 3 leaves (its leaves within P − 1 levels of its
+        // root), or more than the schedule has words for.
         TreeletSettings {
-            phases: Some(6),
-            ..TreeletSettings::BALANCED
-        },
-        TreeletSettings {
-            last_round_size: Some(8),
-            phases: Some(7),
+            phases: Some(MIN_PHASES - 1),
             ..TreeletSettings::BALANCED
         },
         TreeletSettings {
             phases: Some(MAX_PHASES + 1),
             ..TreeletSettings::BALANCED
         },
-        // First-round phases without phased rounds, or too few for the first round's treelets.
+        // First-round phases without phased rounds, or too few.
         TreeletSettings {
             first_round_phases: Some(14),
             ..TreeletSettings::BALANCED
         },
         TreeletSettings {
             phases: Some(7),
-            first_round_phases: Some(6),
+            first_round_phases: Some(MIN_PHASES - 1),
             ..TreeletSettings::BALANCED
         },
     ] {

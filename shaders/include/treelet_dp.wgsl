@@ -5,9 +5,11 @@
 //   1. cost: the root's cost from its children, whose subtrees are final now;
 //   2. formation: start from the root's two children, then repeatedly expand the treelet leaf of
 //      largest surface area that is an internal node (first on ties), up to treelet_size leaves
-//      (always reached: a root has at least gamma >= treelet_size primitives). Each leaf's node
-//      (box and children) is loaded once, when it joins the treelet: an expansion waits for one
-//      load, not two, and the DP's leaf boxes need none;
+//      (always reached, a root having at least gamma >= treelet_size primitives, except in phased
+//      rounds of P < treelet_size phases, which expand no leaf P − 1 levels below the root and
+//      may end with fewer: `treelet_leaves`, the others empty). Each leaf's node (box and
+//      children) is loaded once, when it joins the treelet: an expansion waits for one load, not
+//      two, and the DP's leaf boxes need none;
 //   3. dynamic programming over the subsets S of the leaves in increasing order (a subset's proper
 //      subsets come first): c(S) = min(Ci·a(S) + min_P (c(P) + c(S\P)), Ct·a(S)·t(S)), each
 //      unordered partition once (P over the non-empty subsets of S without its lowest bit, in
@@ -54,6 +56,8 @@ var<private> leaf_cost: array<f32, MAX_TREELET>;
 var<private> leaf_children: array<vec2<u32>, MAX_TREELET>;
 var<private> leaf_area: array<f32, MAX_TREELET>;
 var<private> internal_node: array<u32, MAX_TREELET>;
+// The treelet's leaves (treelet_size, or fewer where the formation's depth bound stopped it).
+var<private> treelet_leaves: u32;
 // The root's children and primitive count before restructuring.
 var<private> root_children: vec2<u32>;
 var<private> root_prims: u32;
@@ -132,27 +136,40 @@ fn best_partition(s: u32) -> vec2<u32> {
     return vec2<u32>(best_p, bitcast<u32>(best));
 }
 
-// Makes `node` the treelet's leaf i: its box, children and area, from one load of the node.
-fn take_leaf(i: u32, node: u32) {
+// Makes `node` the treelet's leaf i: its box, children and area, from one load of the node; an
+// area of -1 if the formation may not expand it (a tree leaf, or `expandable` false).
+fn take_leaf(i: u32, node: u32, expandable: bool) {
     let n = nodes[node];
     leaf_node[i] = node;
     leaf_min[i] = n.min;
     leaf_max[i] = n.max;
     leaf_children[i] = vec2<u32>(n.left_or_first, n.right_or_count);
-    leaf_area[i] = select(surface_area(n.min, n.max, params.zero), -1.0, (n.right_or_count & LEAF_FLAG) != 0u);
+    leaf_area[i] = select(-1.0, surface_area(n.min, n.max, params.zero), expandable && (n.right_or_count & LEAF_FLAG) == 0u);
+}
+
+// The depth below the root of the formation's leaves: 4 bits per leaf (a treelet of 8 leaves
+// reaches 7 levels), a register rather than a private array indexed by the leaf.
+fn leaf_depth(depths: u32, i: u32) -> u32 {
+    return (depths >> (4u * i)) & 15u;
 }
 
 // Steps 1 and 2: the root's cost from its children (final now), stored and returned; the treelet
-// below `root` into the private leaf arrays (leaves past treelet_size empty).
+// below `root` into the private leaf arrays (leaves past `treelet_leaves` empty, their node the
+// root's, so that every load of a leaf's node stays in bounds).
 fn form_treelet(root: u32) -> f32 {
     let r = nodes[root];
     root_children = vec2<u32>(r.left_or_first, r.right_or_count);
     root_prims = prim_counts[root];
     let current = combine_cost(surface_area(r.min, r.max, params.zero), root_prims, costs[r.left_or_first] + costs[r.right_or_count]);
     costs[root] = current;
-    take_leaf(0u, r.left_or_first);
-    take_leaf(1u, r.right_or_count);
+    // Phased rounds (params.phases = P): leaves at most P - 1 levels below the root, a bound a
+    // treelet of at most P leaves never reaches.
+    let max_depth = select(MAX_TREELET, params.phases - 1u, params.phases != 0u);
+    take_leaf(0u, r.left_or_first, 1u < max_depth);
+    take_leaf(1u, r.right_or_count, 1u < max_depth);
     internal_node[0] = root;
+    var depths = 0x11u;
+    treelet_leaves = 2u;
     for (var count = 2u; count < TREELET_SIZE; count++) {
         var best = 0u;
         var best_area = -1.0;
@@ -162,23 +179,36 @@ fn form_treelet(root: u32) -> f32 {
                 best = i;
             }
         }
+        if best_area < 0.0 {
+            break;
+        }
+        let depth = leaf_depth(depths, best) + 1u;
+        depths += (1u << (4u * best)) + (depth << (4u * count));
         internal_node[count - 1u] = leaf_node[best];
         let children = leaf_children[best];
-        take_leaf(best, children.x);
-        take_leaf(count, children.y);
+        take_leaf(best, children.x, depth < max_depth);
+        take_leaf(count, children.y, depth < max_depth);
+        treelet_leaves = count + 1u;
     }
     for (var i = 0u; i < MAX_TREELET; i++) {
-        if i < TREELET_SIZE {
+        if i < treelet_leaves {
             // Both loads at once: the DP does not wait for the costs on its own.
             leaf_prims[i] = prim_counts[leaf_node[i]];
             leaf_cost[i] = costs[leaf_node[i]];
         } else {
+            leaf_node[i] = root;
             leaf_min[i] = vec3<f32>(F32_MAX);
             leaf_max[i] = vec3<f32>(-F32_MAX);
             leaf_prims[i] = 0u;
+            leaf_cost[i] = 0.0;
         }
     }
     return current;
+}
+
+// The set of the treelet's leaves (all but the empty ones).
+fn treelet_full_set() -> u32 {
+    return (1u << treelet_leaves) - 1u;
 }
 
 // Step 4's breadth-first queue: the subsets still to write and the node each goes to (entry 0:
@@ -240,7 +270,7 @@ fn store_root_next_level(root: u32) {
 
 // Step 4, start: the full set goes to the root.
 fn begin_write_back(root: u32) {
-    queue_set[0] = (1u << TREELET_SIZE) - 1u;
+    queue_set[0] = treelet_full_set();
     queue_node[0] = root;
     queued = 1u;
 }
@@ -291,13 +321,19 @@ fn write_back(root: u32, full_split: u32, full_cost: f32) {
     store_next_levels();
 }
 
-// Steps 1-5 for the treelet rooted at `root`.
+// Steps 1-5 for the treelet rooted at `root`. A treelet of fewer leaves than treelet_size takes
+// its full set's partition from the subsets' costs the DP stored (the empty leaves' subsets are
+// computed alongside, and unused); one of 2 leaves has no other topology.
 fn optimize_treelet(root: u32) {
     let current = form_treelet(root);
     build_half_tables();
-    let best = subset_costs();
-    let full_cost = internal_subset_cost((1u << TREELET_SIZE) - 1u, bitcast<f32>(best.y));
-    if full_cost < current {
+    var best = subset_costs();
+    let full = treelet_full_set();
+    if treelet_leaves < TREELET_SIZE {
+        best = best_partition(full);
+    }
+    let full_cost = internal_subset_cost(full, bitcast<f32>(best.y));
+    if treelet_leaves > 2u && full_cost < current {
         write_back(root, best.x, full_cost);
     } else {
         store_root_next_level(root);

@@ -225,12 +225,17 @@ fn optimize_treelet_team(root: u32, has_treelet: bool, team: u32, lane: u32) {
         of_max_size = of_max_size * (MAX_TREELET - k) / (k + 1u);
         count = count * (m - k) / (k + 1u);
     }
-    // Step 4: lane 0 holds the full set's partition (its only subset of size m).
+    // Step 4: lane 0 holds the full set's partition (its only subset of size m); a treelet of
+    // fewer leaves (phased rounds) finds its own among the subsets the DP stored.
     if has_treelet && lane == 0u {
-        let full = (1u << m) - 1u;
+        let full = treelet_full_set();
         let full_area = surface_area(team_subset_min(halves, full), team_subset_max(halves, full), params.zero);
-        let full_cost = combine_cost(full_area, team_subset_prims(halves, full), full_best);
-        if full_cost < current {
+        var full_cost = combine_cost(full_area, team_subset_prims(halves, full), full_best);
+        if treelet_leaves < m {
+            full_split = team_split[subsets + full];
+            full_cost = team_cost[subsets + full];
+        }
+        if treelet_leaves > 2u && full_cost < current {
             team_write_back(root, team, full_split, full_cost);
         } else {
             store_root_next_level(root);

@@ -80,9 +80,9 @@ pub struct TraceArgs {
     /// treelet size; not with --round-overlap); `bench` takes a comma-separated list
     #[arg(long, value_delimiter = ',')]
     last_round_size: Vec<u32>,
-    /// Each round of trbvh in P phases by depth instead of bottom-up (P at least the treelet
-    /// size, at most 16; 0: bottom-up, the paper's order and the default); `bench` takes a
-    /// comma-separated list
+    /// Each round of trbvh in P phases by depth instead of bottom-up (3..=16; below the treelet
+    /// size a treelet's leaves stay within P − 1 levels of its root; 0: bottom-up, the paper's
+    /// order and the default); `bench` takes a comma-separated list
     #[arg(long, value_delimiter = ',')]
     phases: Vec<u32>,
     /// Phases of the first round of phased trbvh rounds (default: --phases; 14 with --phases 7

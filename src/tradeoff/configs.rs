@@ -1,6 +1,6 @@
 //! The builder configurations a trade-off study compares, derived from `Builder::ALL` by name so
 //! that builders added later (e.g. `sbvh`, `trbvh-split`) join the study without changes here:
-//! `trbvh` is swept over treelet sizes × rounds (and takes part once with phased rounds),
+//! `trbvh` is swept over treelet sizes × rounds (and takes part with two phased rounds' settings),
 //! `trbvh-split` over split budgets β (the paper's n = 7, 3 rounds), and every other builder in `Builder::ALL` takes part once with its listed
 //! settings. GPU builders come first, then the CPU references.
 
@@ -13,13 +13,23 @@ pub const TREELET_SIZES: [u32; 3] = [5, 7, 8];
 pub const ROUNDS: [u32; 3] = [1, 2, 3];
 /// Pre-splitting budgets β (percent) swept for `trbvh-split`.
 pub const SPLIT_PERCENTS: [u32; 3] = [10, 30, 50];
-/// The phased rounds `trbvh` also takes part with (`TreeletSettings::phases`): 7 leaves, 3 rounds
-/// of 14, 7 and 7 phases, within 0.35 % of the paper's SAH on the shared scenes.
-pub const PHASED: TreeletSettings = TreeletSettings {
-    phases: Some(7),
-    first_round_phases: Some(14),
-    ..TreeletSettings::BALANCED
-};
+/// The phased rounds `trbvh` also takes part with (`TreeletSettings::phases`), 7 leaves: 3
+/// rounds of 14, 7 and 7 phases (28), within 0.35 % of the paper's SAH on the shared scenes, and
+/// 4 rounds of 5, 4, 4 and 4 (17, the treelets' leaves within 3 levels of their roots), within
+/// 0.6 %.
+pub const PHASED: [TreeletSettings; 2] = [
+    TreeletSettings {
+        phases: Some(7),
+        first_round_phases: Some(14),
+        ..TreeletSettings::BALANCED
+    },
+    TreeletSettings {
+        rounds: 4,
+        phases: Some(4),
+        first_round_phases: Some(5),
+        ..TreeletSettings::BALANCED
+    },
+];
 
 /// The configurations to measure. `quick` keeps one `trbvh` setting (`TreeletSettings::FAST`)
 /// and `trbvh-split` with its listed budget instead of the sweeps, for tests and previews.
@@ -63,7 +73,7 @@ fn variants(builder: Builder, quick: bool) -> Vec<Builder> {
                 })
             })
         })
-        .chain([builder.with_treelet_settings(PHASED)])
+        .chain(PHASED.map(|phased| builder.with_treelet_settings(phased)))
         .collect()
 }
 
@@ -82,7 +92,7 @@ mod tests {
             );
         }
         let trbvh = configs.iter().filter(|c| c.name() == "trbvh").count();
-        assert_eq!(trbvh, TREELET_SIZES.len() * ROUNDS.len() + 1);
+        assert_eq!(trbvh, TREELET_SIZES.len() * ROUNDS.len() + PHASED.len());
         let split = configs.iter().filter(|c| c.name() == "trbvh-split").count();
         if Builder::ALL.iter().any(|b| b.name() == "trbvh-split") {
             assert_eq!(split, SPLIT_PERCENTS.len());

@@ -85,7 +85,7 @@ impl WorkingTree {
         for node in self.post_order() {
             self.finish_node(node, model);
             if self.prim_counts[node as usize] >= gamma {
-                self.optimize_treelet(node, model, treelet_size);
+                self.optimize_treelet(node, model, treelet_size, u32::MAX);
             }
         }
     }
@@ -164,7 +164,7 @@ impl WorkingTree {
             ops.sort_unstable();
             for (round, node) in ops {
                 self.finish_node(node, model);
-                for x in self.optimize_treelet(node, model, treelet_size) {
+                for x in self.optimize_treelet(node, model, treelet_size, u32::MAX) {
                     for r in 0..=round {
                         waves.mark(x, r, wave);
                     }
@@ -192,9 +192,9 @@ impl WorkingTree {
     /// `TreeletSettings::phases`, module `phases`): counts and costs once, then per round and phase
     /// k every root (an internal node of at least γ primitives) at depth ≡ P − 1 − k (mod P) in
     /// the tree the phases before left, its cost first recomputed from its children's. Roots of
-    /// one phase lie at least P levels apart, deeper than a treelet reaches below its root (P is
-    /// at least the treelet size), so their treelets are disjoint and their order does not
-    /// matter. Costs are not refreshed otherwise: a node above a treelet that
+    /// one phase lie at least P levels apart and a treelet's leaves at most P − 1 below its root
+    /// (the formation expands no leaf that deep; with P at least the treelet size it never
+    /// reaches it), so their treelets are disjoint and their order does not matter. Costs are not refreshed otherwise: a node above a treelet that
     /// lowered its cost keeps its own until its turn as a root (a node that is no root keeps it,
     /// as the collapse reads it; on the shared scenes the refreshed costs give the same SAH to
     /// four places).
@@ -207,7 +207,7 @@ impl WorkingTree {
             for k in 0..phases {
                 for root in self.phase_roots(gamma, phases, phases - 1 - k) {
                     self.finish_node(root, model);
-                    self.optimize_treelet(root, model, treelet_size);
+                    self.optimize_treelet(root, model, treelet_size, phases - 1);
                 }
             }
         }
@@ -233,17 +233,25 @@ impl WorkingTree {
         roots
     }
 
-    /// Optimizes the treelet at `root`; returns the internal nodes it rewrote (none when the
-    /// topology is kept).
-    fn optimize_treelet(&mut self, root: u32, model: &CostModel, treelet_size: u32) -> Vec<u32> {
+    /// Optimizes the treelet at `root` of up to `treelet_size` leaves, none deeper than
+    /// `max_leaf_depth` levels below the root (fewer leaves where that stops the formation);
+    /// returns the internal nodes it rewrote (none when the topology is kept).
+    fn optimize_treelet(
+        &mut self,
+        root: u32,
+        model: &CostModel,
+        treelet_size: u32,
+        max_leaf_depth: u32,
+    ) -> Vec<u32> {
         let (l, r) = self.nodes[root as usize].children();
         let mut leaves = vec![l, r];
+        let mut depths = vec![1, 1];
         let mut internal = vec![root];
         while (leaves.len() as u32) < treelet_size {
             let mut best = None;
             let mut best_area = -1.0;
             for (i, &node) in leaves.iter().enumerate() {
-                if !self.nodes[node as usize].is_leaf() {
+                if !self.nodes[node as usize].is_leaf() && depths[i] < max_leaf_depth {
                     let a = self.area(node);
                     if a > best_area {
                         best_area = a;
@@ -256,6 +264,8 @@ impl WorkingTree {
             let (cl, cr) = self.nodes[expanded as usize].children();
             leaves[best] = cl;
             leaves.push(cr);
+            depths[best] += 1;
+            depths.push(depths[best]);
             internal.push(expanded);
         }
         if leaves.len() < 3 {

@@ -30,7 +30,7 @@ pub use dp::{
 pub use nodes_compact::NODES_COMPACT;
 pub use nodes_level::NODES_LEVEL;
 pub use nodes_mark::NODES_MARK;
-pub use phases::{MAX_PHASES, ROOTS_PHASE};
+pub use phases::{MAX_PHASES, MIN_PHASES, ROOTS_PHASE};
 pub use subtrees_optimize::SUBTREES_OPTIMIZE;
 pub use treelets_climb::TREELETS_CLIMB;
 pub use treelets_optimize::TREELETS_OPTIMIZE;
@@ -78,10 +78,12 @@ pub struct TreeletSettings {
     /// round's cost (966 partition tests for 7 leaves, 90 for 5), and the last round improves
     /// the tree least (README, "A cheaper last round").
     pub last_round_size: Option<u32>,
-    /// Each round in P phases by depth instead of bottom-up, P at least every round's treelet
-    /// size: phase k optimizes the roots whose depth is ≡ P − 1 − k (mod P), depths as the
-    /// phases before left them (`WorkingTree::optimize_phased`). Not the paper's order, so not
-    /// its tree: a round is P phases (two dispatches each) of many treelets each, not a step per
+    /// Each round in P phases by depth instead of bottom-up: phase k optimizes the roots whose
+    /// depth is ≡ P − 1 − k (mod P), depths as the phases before left them
+    /// (`WorkingTree::optimize_phased`). A treelet's leaves lie at most P − 1 levels below its
+    /// root, so a phase's treelets are disjoint: below the treelet size, the formation expands no
+    /// leaf at that depth (and may end with fewer leaves). Not the paper's order, so not its
+    /// tree: a round is P phases (two dispatches each) of many treelets each, not a step per
     /// treelet level (20-37 on the shared scenes, most of them a few treelets waiting on one
     /// another). None: the paper's bottom-up rounds.
     pub phases: Option<u32>,
@@ -205,18 +207,15 @@ impl TreeletSettings {
             let Some(phases) = self.round_phases(round) else {
                 break;
             };
-            // A round's treelets reach its treelet size − 1 levels below their roots.
-            let size = self.round_size(round);
             let which = if round == 0 && self.first_round_phases.is_some() {
                 "first-round treelet phases"
             } else {
                 "treelet phases"
             };
-            if !(size..=MAX_PHASES).contains(&phases) {
+            if !(MIN_PHASES..=MAX_PHASES).contains(&phases) {
                 return Err(Error::InvalidArgument(format!(
-                    "{which} must be {size}..={MAX_PHASES} (at least the round's treelet size: \
-                     roots of one phase lie that many levels apart, so their treelets are \
-                     disjoint), got {phases}"
+                    "{which} must be {MIN_PHASES}..={MAX_PHASES} (a treelet's leaves lie at most \
+                     P − 1 levels below its root, and a treelet needs 3 leaves), got {phases}"
                 )));
             }
         }

@@ -5,9 +5,10 @@
 //! P − 1 − k (mod P) in the tree the phases before left: a `roots_phase` dispatch finds them
 //! (each root walks up to the tree's root) and buckets them with the phase's indirect arguments,
 //! then a `treelets_optimize` dispatch optimizes them, one invocation each (a team of 32 each in a
-//! phase of fewer than `RoundSchedule::team_below`). Roots of a phase lie
-//! at least P levels apart, more than a treelet reaches below its root, so the phase's treelets
-//! are disjoint. CPU twin: `WorkingTree::optimize_phased`.
+//! phase of fewer than `RoundSchedule::team_below`). Roots of a phase lie at least P levels
+//! apart, and a treelet's leaves at most P − 1 levels below its root (below the treelet size the
+//! formation expands no leaf that deep: `treelet_dp.wgsl`), so the phase's treelets are
+//! disjoint. CPU twin: `WorkingTree::optimize_phased`.
 
 use super::rounds::{Round, RoundParams, TreeletRounds, TreeletState, SCHEDULE_ARGS};
 use crate::gpu::constants::MAX_LEVEL_DISPATCHES;
@@ -19,6 +20,9 @@ kernel!(pub ROOTS_PHASE: RoundParams = "roots_phase"::"main", [64, 1, 1],
 
 /// Phases per round at most: each phase counts its roots in a schedule word of its own.
 pub const MAX_PHASES: u32 = 16;
+/// Phases per round at least: a treelet's leaves lie at most P − 1 levels below its root, and a
+/// treelet needs 3 leaves (2 levels).
+pub const MIN_PHASES: u32 = 3;
 const _: () = assert!(MAX_PHASES <= MAX_LEVEL_DISPATCHES);
 
 /// The kernel that finds a phase's roots (the treelets are `TreeletRounds`' kernels) and the
