@@ -6,8 +6,12 @@
 //! takes (the phases, against the bottom-up rounds' treelet levels, each waiting for the one
 //! below).
 //!
+//! Arguments: scenes, phases P, rounds, the first round's phases (default: P), treelet sizes
+//! (default: 7; below P a treelet's leaves stay within P − 1 levels of its root).
+//!
 //! ```text
-//! cargo run --release --example phased_rounds -- conference,sibenik 7,14 3,4 [14]
+//! cargo run --release --example phased_rounds -- conference,sibenik 7,14 3,4 [14] [7]
+//! cargo run --release --example phased_rounds -- conference,sibenik 4 4 5,6 6,7
 //! ```
 use treelet::bvh::lbvh::{build_lbvh_from_boxes_cpu, prim_boxes_cpu, TRBVH_KEY_BITS};
 use treelet::bvh::treelet::{optimize_lbvh_cpu, CostModel, TreeletSettings, WorkingTree};
@@ -32,10 +36,11 @@ fn main() -> treelet::Result<()> {
         Some(text) => numbers(Some(text), "").into_iter().map(Some).collect(),
         None => vec![None],
     };
+    let sizes = numbers(args.next(), "7");
     let sah = SahParams::default();
     let model = CostModel::from(&sah);
     let paper = TreeletSettings::BALANCED;
-    println!("scene            rounds  phases  first  SAH          vs bottom-up  steps");
+    println!("scene            size  rounds  phases  first  SAH          vs bottom-up  steps");
     for name in scenes.split(',') {
         let scene = load_scene(name)?;
         let (lbvh, parents) =
@@ -50,30 +55,36 @@ fn main() -> treelet::Result<()> {
         }
         let reference = sah_cost(&tree.collapse(&model, None), &sah);
         println!(
-            "{name:16} {:6}  {:>6}  {:>5}  {reference:<11.4}  {:>12}  {levels:5}",
-            paper.rounds, "-", "-", "-"
+            "{name:16} {:4}  {:6}  {:>6}  {:>5}  {reference:<11.4}  {:>12}  {levels:5}",
+            paper.treelet_size, paper.rounds, "-", "-", "-"
         );
-        for &rounds in &round_counts {
-            for &phases in &phase_counts {
-                for &first_round_phases in &first_counts {
-                    let settings = TreeletSettings {
-                        rounds,
-                        phases: Some(phases),
-                        first_round_phases,
-                        ..paper
-                    };
-                    let first = settings.round_phases(0).unwrap_or(phases);
-                    if let Err(error) = settings.validate(&sah) {
-                        println!("{name:16} {rounds:6}  {phases:6}  {first:5}  {error}");
-                        continue;
+        for &treelet_size in &sizes {
+            for &rounds in &round_counts {
+                for &phases in &phase_counts {
+                    for &first_round_phases in &first_counts {
+                        let settings = TreeletSettings {
+                            treelet_size,
+                            rounds,
+                            phases: Some(phases),
+                            first_round_phases,
+                            ..paper
+                        };
+                        let first = settings.round_phases(0).unwrap_or(phases);
+                        let row = format!(
+                            "{name:16} {treelet_size:4}  {rounds:6}  {phases:6}  {first:5}"
+                        );
+                        if let Err(error) = settings.validate(&sah) {
+                            println!("{row}  {error}");
+                            continue;
+                        }
+                        let phased = optimize_lbvh_cpu(lbvh.clone(), &settings, &model);
+                        let cost = sah_cost(&phased.collapse(&model, None), &sah);
+                        println!(
+                            "{row}  {cost:<11.4}  {:>+11.2}%  {:5}",
+                            (cost / reference - 1.0) * 100.0,
+                            first + (rounds - 1) * phases
+                        );
                     }
-                    let phased = optimize_lbvh_cpu(lbvh.clone(), &settings, &model);
-                    let cost = sah_cost(&phased.collapse(&model, None), &sah);
-                    println!(
-                        "{name:16} {rounds:6}  {phases:6}  {first:5}  {cost:<11.4}  {:>+11.2}%  {:5}",
-                        (cost / reference - 1.0) * 100.0,
-                        first + (rounds - 1) * phases
-                    );
                 }
             }
         }
