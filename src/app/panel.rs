@@ -15,6 +15,7 @@ use super::settings::ViewSettings;
 use super::stats::BuildTiming;
 use super::stats::FrameStats;
 use crate::anim::{AnimateStage, ANIMATIONS};
+use crate::bvh::treelet::TreeletSettings;
 use crate::bvh::wide::{Layout, WideCollapse, WideNode, WIDTH};
 use crate::bvh::{BuildSchedule, Builder, BvhNode, TunedSchedule, UpdateMode};
 use crate::scene::{Triangle, SCENES};
@@ -294,6 +295,44 @@ fn size_text(bytes: u64) -> String {
     }
 }
 
+/// The order of a treelet builder's rounds (none for other builders): the paper's bottom-up
+/// rounds or the phased ones (`TreeletSettings::PHASED`), with the builder's split budget kept.
+fn treelet_order(ui: &mut egui::Ui, settings: &mut ViewSettings) {
+    let Some(current) = settings.builder.builder().treelet_settings() else {
+        return;
+    };
+    let orders = [
+        ("bottom-up (the paper's)", TreeletSettings::BALANCED),
+        ("phased (17 steps)", TreeletSettings::PHASED),
+    ];
+    let mut selected = TreeletSettings {
+        split_percent: 0,
+        ..current
+    };
+    let shown = orders
+        .iter()
+        .find(|(_, order)| *order == selected)
+        .map_or("other (command line)", |(name, _)| name);
+    egui::ComboBox::from_label("treelet order")
+        .selected_text(shown)
+        .show_ui(ui, |ui| {
+            for (name, order) in orders {
+                ui.selectable_value(&mut selected, order, name);
+            }
+        })
+        .response
+        .on_hover_text(
+            "The treelet rounds: the paper's 3 rounds bottom-up, a step per treelet level \
+             (57-108 on the shared scenes), or 4 rounds of 5, 4, 4 and 4 phases by depth, \
+             17 steps of many treelets each, another tree within 0.6 % of the paper's SAH \
+             (README, \"Phased rounds\")",
+        );
+    settings.select_builder(settings.builder.with_treelet_settings(TreeletSettings {
+        split_percent: current.split_percent,
+        ..selected
+    }));
+}
+
 /// What a layout's nodes are, for the panel.
 fn layout_detail(layout: Layout) -> String {
     match layout {
@@ -337,6 +376,7 @@ fn bvh(
             }
         });
     settings.select_builder(builder);
+    treelet_order(ui, settings);
     egui::ComboBox::from_label("layout")
         .selected_text(settings.layout.name())
         .show_ui(ui, |ui| {

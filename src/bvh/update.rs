@@ -94,6 +94,15 @@ impl UpdateMode {
             UpdateMode::Rebuild(b) | UpdateMode::Refit(b) => b,
         }
     }
+
+    /// The same mode with its builder's treelet settings replaced
+    /// (`Builder::with_treelet_settings`).
+    pub fn with_treelet_settings(self, settings: TreeletSettings) -> Self {
+        match self {
+            UpdateMode::Rebuild(b) => UpdateMode::Rebuild(b.with_treelet_settings(settings)),
+            UpdateMode::Refit(b) => UpdateMode::Refit(b.with_treelet_settings(settings)),
+        }
+    }
 }
 
 /// The builder behind a mode.
@@ -405,5 +414,29 @@ mod tests {
         for mode in UpdateMode::all() {
             assert_eq!(UpdateMode::parse(mode.name()).unwrap().name(), mode.name());
         }
+    }
+
+    #[test]
+    fn treelet_settings_change_the_builder_not_the_mode() {
+        let phased = TreeletSettings::PHASED;
+        assert!(phased.validate(&SahParams::default()).is_ok());
+        assert_eq!(
+            UpdateMode::Refit(Builder::Trbvh(TreeletSettings::BALANCED))
+                .with_treelet_settings(phased),
+            UpdateMode::Refit(Builder::Trbvh(phased))
+        );
+        let split = TreeletSettings {
+            split_percent: 30,
+            ..phased
+        };
+        assert_eq!(
+            UpdateMode::Rebuild(Builder::TrbvhSplit(TreeletSettings::BALANCED))
+                .with_treelet_settings(split),
+            UpdateMode::Rebuild(Builder::TrbvhSplit(split))
+        );
+        assert_eq!(
+            UpdateMode::Rebuild(Builder::Lbvh).with_treelet_settings(phased),
+            UpdateMode::Rebuild(Builder::Lbvh)
+        );
     }
 }

@@ -23,12 +23,7 @@ pub const PHASED: [TreeletSettings; 2] = [
         first_round_phases: Some(14),
         ..TreeletSettings::BALANCED
     },
-    TreeletSettings {
-        rounds: 4,
-        phases: Some(4),
-        first_round_phases: Some(5),
-        ..TreeletSettings::BALANCED
-    },
+    TreeletSettings::PHASED,
 ];
 
 /// The configurations to measure. `quick` keeps one `trbvh` setting (`TreeletSettings::FAST`)
