@@ -67,7 +67,7 @@ pub struct TraceArgs {
     #[arg(long, default_value_t = SahParams::default().max_leaf_size)]
     max_leaf_size: u32,
     /// Treelet preset for trbvh: fast (n=5, 1 round), balanced (n=7, 3 rounds, the paper's; the
-    /// default) or high (n=8, 4 rounds)
+    /// default), high (n=8, 4 rounds) or phased (n=7, 4 rounds of 5, 4, 4 and 4 phases)
     #[arg(long, value_parser = parse_preset)]
     preset: Option<TreeletSettings>,
     /// Leaves per treelet (3..=8) for trbvh, overriding the preset; `bench` takes a comma-separated list
@@ -141,8 +141,10 @@ impl TraceArgs {
                                 split_percent: 0,
                                 last_round_size: last_round_size.or(preset.last_round_size),
                                 phases,
+                                // The preset's apply to phased rounds only (given ones
+                                // without them are refused).
                                 first_round_phases: first_round_phases
-                                    .or(preset.first_round_phases),
+                                    .or(phases.and(preset.first_round_phases)),
                             });
                         }
                     }

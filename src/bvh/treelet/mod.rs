@@ -160,14 +160,15 @@ impl TreeletSettings {
             .is_none_or(|size| size == self.treelet_size)
     }
 
-    /// A preset by name: `fast`, `balanced` or `high`.
+    /// A preset by name: `fast`, `balanced`, `high` or `phased`.
     pub fn preset(name: &str) -> Result<Self> {
         match name {
             "fast" => Ok(Self::FAST),
             "balanced" => Ok(Self::BALANCED),
             "high" => Ok(Self::HIGH_QUALITY),
+            "phased" => Ok(Self::PHASED),
             _ => Err(Error::InvalidArgument(format!(
-                "unknown treelet preset '{name}' (known: fast, balanced, high)"
+                "unknown treelet preset '{name}' (known: fast, balanced, high, phased)"
             ))),
         }
     }
