@@ -155,7 +155,7 @@ export -f teams
 # paper's trees on the shared scenes with 14, 28 phases in all), beside the bottom-up rounds, all
 # untuned; the whole build, its treelet stages and SAH; then 4 rounds of 4 phases, the first of
 # 5 or 6 (17 or 18 phases; treelets whose leaves stay within 3 levels of their roots, SAH -0.9 to
-# +0.4 %). Then on two scenes 4 rounds of 7, and teams of 32 per treelet in phases below 2048
+# +0.75 % with trbvh-split's). Then on two scenes 4 rounds of 7, and teams of 32 per treelet in phases below 2048
 # treelets and in every phase (the same tree): a phase holds thousands of treelets, where the
 # lone DP's throughput matters more than one treelet's latency.
 phases() {

@@ -194,10 +194,10 @@ impl WorkingTree {
     /// the tree the phases before left, its cost first recomputed from its children's. Roots of
     /// one phase lie at least P levels apart and a treelet's leaves at most P − 1 below its root
     /// (the formation expands no leaf that deep; with P at least the treelet size it never
-    /// reaches it), so their treelets are disjoint and their order does not matter. Costs are not refreshed otherwise: a node above a treelet that
-    /// lowered its cost keeps its own until its turn as a root (a node that is no root keeps it,
-    /// as the collapse reads it; on the shared scenes the refreshed costs give the same SAH to
-    /// four places).
+    /// reaches it), so their treelets are disjoint and their order does not matter. Costs are
+    /// not refreshed otherwise: a node above a treelet that lowered its cost keeps its own until
+    /// its turn as a root (a node that is no root keeps it, as the collapse reads it; on the
+    /// shared scenes the refreshed costs give the same SAH to four places).
     pub fn optimize_phased(&mut self, model: &CostModel, rounds: &[(u32, u32, u32)]) {
         self.leaf_costs(model);
         for node in self.post_order() {
