@@ -16,7 +16,7 @@
 // indirect arguments (`optimize_workgroups`, treelet_round.wgsl).
 #include "treelet_round.wgsl"
 
-const WORKGROUP: u32 = 64u;
+const WORKGROUP: u32 = 256u;
 
 @group(0) @binding(0) var<uniform> params: RoundParams;
 @group(0) @binding(1) var<storage, read> parents: array<u32>;

@@ -15,7 +15,7 @@ use crate::gpu::constants::MAX_LEVEL_DISPATCHES;
 use crate::gpu::{grow_storage_buffer, kernel, GpuContext, ItemCount, Kernel, Recorder};
 use crate::Result;
 
-kernel!(pub ROOTS_PHASE: RoundParams = "roots_phase"::"main", [64, 1, 1],
+kernel!(pub ROOTS_PHASE: RoundParams = "roots_phase"::"main", [256, 1, 1],
     [Read, Read, ReadWrite, Read, ReadWrite, ReadWrite]);
 
 /// Phases per round at most: each phase counts its roots in a schedule word of its own.
