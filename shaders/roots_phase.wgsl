@@ -8,8 +8,8 @@
 // published: an ancestor of a root is a root, so the walks of one phase share their upper parts
 // (on a GPU, where all walk at once, a walk ends about halfway up). Published depths are exact
 // whichever walker got there first, so the phase's roots are too: the same tree every time.
-// Phase k publishes in half k mod 2 of `depths` and zeroes the other half for phase k + 1 (the
-// round starts with both zero). Roots of one phase lie at least `phases` levels apart, more than
+// A published depth carries its phase's stamp (k + 1 in the high byte), so a phase reads only
+// its own and no phase zeroes the words for the next (the round starts with all zero). Roots of one phase lie at least `phases` levels apart, more than
 // a treelet reaches below its root, so their treelets are disjoint. A workgroup reserves the
 // slots of its roots with one device atomic; the workgroup that finishes last (a ticket that
 // counts on over the round's phases, each a dispatch of the same grid) writes the phase's
@@ -25,9 +25,12 @@ const WORKGROUP: u32 = 256u;
 // The item count's limit (`gpu::ItemCount`): the tree has min(params.count, count_limit[0]) leaves.
 @group(0) @binding(4) var<storage, read> count_limit: array<u32>;
 @group(0) @binding(5) var<storage, read_write> roots: array<u32>;
-// Two halves of params.count words: per internal node 0 (not known yet) or its depth mod phases
-// + 1, published this phase (half k mod 2) and zeroed for the next (the other half).
+// Per internal node its depth mod phases + 1 with the stamp of the phase that published it
+// (`PHASE_STAMP`); another phase's stamp, or 0, reads as not known yet.
 @group(0) @binding(6) var<storage, read_write> depths: array<atomic<u32>>;
+
+// The stamp of phase k: k + 1 above the 24 bits of the depth residue + 1.
+const PHASE_STAMP: u32 = 1u << 24u;
 
 var<workgroup> workgroup_roots: atomic<u32>;
 var<workgroup> workgroup_first: u32;
@@ -42,28 +45,25 @@ fn main(
     let j = gid.x + gid.y * params.row_pitch;
     let n = min(params.count, count_limit[0]);
     let phase = params.phases - 1u - params.residue;
-    let published = (phase % 2u) * params.count;
-    let next = params.count - published;
+    let stamp = (phase + 1u) * PHASE_STAMP;
     var takes = false;
-    if j + 1u < n {
-        atomicStore(&depths[next + j], 0u);
-        if prim_counts[j] >= params.gamma {
-            // Steps up to the tree's root (depth 0), or to an ancestor of known depth.
-            var steps = 0u;
-            var known = 0u;
-            var node = j;
-            while node != 0u {
-                known = atomicLoad(&depths[published + node]);
-                if known != 0u {
-                    break;
-                }
-                node = parents[node];
-                steps++;
+    if j + 1u < n && prim_counts[j] >= params.gamma {
+        // Steps up to the tree's root (depth 0), or to an ancestor of known depth.
+        var steps = 0u;
+        var known = 0u;
+        var node = j;
+        while node != 0u {
+            let word = atomicLoad(&depths[node]);
+            if word >= stamp && word < stamp + PHASE_STAMP {
+                known = word - stamp;
+                break;
             }
-            let residue = (select(0u, known - 1u, known != 0u) + steps) % params.phases;
-            atomicStore(&depths[published + j], residue + 1u);
-            takes = residue == params.residue;
+            node = parents[node];
+            steps++;
         }
+        let residue = (select(0u, known - 1u, known != 0u) + steps) % params.phases;
+        atomicStore(&depths[j], stamp + residue + 1u);
+        takes = residue == params.residue;
     }
     let slot = params.level - 1u;
     var rank = 0u;

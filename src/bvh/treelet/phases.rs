@@ -29,7 +29,8 @@ const _: () = assert!(MAX_PHASES <= MAX_LEVEL_DISPATCHES);
 /// depths its walks publish.
 pub(crate) struct PhasedRounds {
     roots_phase: Kernel<RoundParams>,
-    /// Two halves of a word per leaf (`roots_phase.wgsl`); grown on demand.
+    /// A word per leaf, stamped by the phase that published it (`roots_phase.wgsl`); grown on
+    /// demand.
     depths: Option<wgpu::Buffer>,
 }
 
@@ -43,7 +44,7 @@ impl PhasedRounds {
 
     /// Grows the published depths for trees of up to `n` leaves.
     pub fn reserve(&mut self, ctx: &GpuContext, n: u32) -> Result<()> {
-        let size = 8 * u64::from(n.max(1));
+        let size = 4 * u64::from(n.max(1));
         grow_storage_buffer(ctx, &mut self.depths, "treelet phase depths", size)
     }
 
@@ -71,9 +72,9 @@ impl PhasedRounds {
             .depths
             .as_ref()
             .expect("reserve() allocates the depths");
-        // Both halves zero: phase 0 publishes in the first, and zeroes the second for phase 1.
+        // No stamp of the round before: every phase's stamp reads as its own only.
         rec.encoder()
-            .clear_buffer(depths, 0, Some(8 * u64::from(n)));
+            .clear_buffer(depths, 0, Some(4 * u64::from(n)));
         let mut pass = rec.pass("treelets");
         for k in 0..phases {
             let params = RoundParams::phase(n, grid.row_pitch, round, (phases, k), team_below);
