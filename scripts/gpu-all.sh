@@ -168,6 +168,9 @@ phases() {
   for s in conference field:707; do
     timeout 30 $TREELET bench --scene $s --builder trbvh --rounds 4 --phases 4 --first-round-phases 5 \
       --team-below 0,2048,4294967295 --tune-schedule off $small >> $res/phases.jsonl
+    # Every dispatch of 5, 4, 4, 4 timed (roots_phase against treelets_optimize, phase by phase).
+    timeout 30 $TREELET bench --scene $s --builder trbvh --preset phased --profile-dispatches \
+      --tune-schedule off --width 64 --height 64 --spp 1 --repeats 5 >> $res/phases_profile.jsonl
     timeout 20 $TREELET bench --scene $s --builder trbvh --phases 7 --rounds 4 --tune-schedule off $small \
       >> $res/phases.jsonl
     timeout 30 $TREELET bench --scene $s --builder trbvh --phases 7 --first-round-phases 14 \
@@ -242,6 +245,16 @@ round_rows("subtrees.jsonl", "builder, subtree levels, width, level dispatches a
            [("builder", 11), ("subtree_levels", 2), ("subtree_width", 4), ("level_dispatches", 4)])
 round_rows("phases.jsonl", "builder, rounds, phases, first round's, teams below",
            [("builder", 11), ("rounds", 2), ("phases", 4), ("first_round_phases", 4), ("team_below", 10)])
+print("phases_profile.jsonl: scene, per kernel: dispatches and ms in all; then each phase's roots_phase + treelets_optimize ms")
+for r in rows("phases_profile.jsonl"):
+    totals = {}
+    for d in r.get("dispatch_ms") or []:
+        n, ms = totals.get(d["kernel"], (0, 0.0))
+        totals[d["kernel"]] = (n + 1, ms + d["ms"])
+    print(f"  {os.path.basename(r['scene'])[:14]:14} " + ", ".join(f"{k} {n}x {ms:.3f}" for k, (n, ms) in totals.items()))
+    walks = [d["ms"] for d in r.get("dispatch_ms") or [] if d["kernel"] == "roots_phase"]
+    treelets = [d["ms"] for d in r.get("dispatch_ms") or [] if d["kernel"] == "treelets_optimize"]
+    print("    " + " ".join(f"{w:.3f}+{t:.3f}" for w, t in zip(walks, treelets)))
 round_rows("teams.jsonl", "overlap, teams below (levels), (climb)",
            [("round_overlap", 4), ("team_below", 5), ("climb_team_below", 3)])
 print("indirect.jsonl: scene, builder, layout, indirect validation, turn, build ms (min/median/max), wide ms,"
