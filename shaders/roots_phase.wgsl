@@ -9,9 +9,10 @@
 // (on a GPU, where all walk at once, a walk ends about halfway up). Published depths are exact
 // whichever walker got there first, so the phase's roots are too: the same tree every time.
 // A published depth carries its phase's stamp (k + 1 in the high byte), so a phase reads only
-// its own and no phase zeroes the words for the next (the round starts with all zero). Roots of one phase lie at least `phases` levels apart, more than
-// a treelet reaches below its root, so their treelets are disjoint. A workgroup reserves the
-// slots of its roots with one device atomic; the workgroup that finishes last (a ticket that
+// its own and no phase zeroes the words for the next (the round starts with all zero). Roots of
+// one phase lie at least `phases` levels apart and a treelet's leaves at most `phases` − 1 below
+// its root (treelet_dp.wgsl's formation), so their treelets are disjoint. A workgroup reserves
+// the slots of its roots with one device atomic; the workgroup that finishes last (a ticket that
 // counts on over the round's phases, each a dispatch of the same grid) writes the phase's
 // indirect arguments (`optimize_workgroups`, treelet_round.wgsl).
 #include "treelet_round.wgsl"
