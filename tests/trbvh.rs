@@ -512,14 +512,7 @@ fn phased_rounds_equal_their_cpu_twin() {
     );
     // Fewer phases than the treelet size: the formation keeps a treelet's leaves within P − 1
     // levels of its root, so some treelets have fewer leaves (down to 3 at P = 3).
-    check_gpu_against_cpu(
-        builder,
-        random_soup(2500, 48),
-        TreeletSettings {
-            first_round_phases: Some(5),
-            ..phased(7, 4, 4)
-        },
-    );
+    check_gpu_against_cpu(builder, random_soup(2500, 48), TreeletSettings::PHASED);
     check_gpu_against_cpu(
         builder,
         load_scene("field-10k").unwrap().triangles,
@@ -528,43 +521,39 @@ fn phased_rounds_equal_their_cpu_twin() {
     let geometry = Geometry::upload(gpu(), &scene_of(random_soup(2500, 45))).unwrap();
     builder.settings = TreeletSettings::BALANCED;
     let bottom_up = builder.build_stages(gpu(), &geometry).unwrap();
-    builder.settings = phased(7, 3, 7);
-    let by_phase = builder.build_stages(gpu(), &geometry).unwrap();
-    assert!(by_phase.lbvh == bottom_up.lbvh, "the same LBVH");
-    // Teams (every phase) and the DP's loop form build the phased tree of lone invocations.
-    for schedule in [
-        RoundSchedule {
-            team_below: Some(u32::MAX),
-            ..RoundSchedule::default()
-        },
-        RoundSchedule {
-            dp: Some(TreeletDp::Loop),
-            ..RoundSchedule::default()
-        },
-    ] {
-        builder.set_schedule(schedule);
-        let other = builder.build_stages(gpu(), &geometry).unwrap();
-        assert!(other.working == by_phase.working, "{schedule:?}");
+    // 7 phases a round, and 4 rounds of 5, 4, 4 and 4 phases, whose treelets the depth bound cuts
+    // short (teams finish them from the subsets' costs of their DP, lone invocations by searching
+    // their full set's partition): teams (every phase) and the DP's loop form build the phased
+    // tree of lone invocations.
+    let mut phased_trees = Vec::new();
+    for settings in [phased(7, 3, 7), TreeletSettings::PHASED] {
+        builder.settings = settings;
+        let tree = builder.build_stages(gpu(), &geometry).unwrap();
+        assert!(tree.lbvh == bottom_up.lbvh, "the same LBVH");
+        for schedule in [
+            RoundSchedule {
+                team_below: Some(u32::MAX),
+                ..RoundSchedule::default()
+            },
+            RoundSchedule {
+                dp: Some(TreeletDp::Loop),
+                ..RoundSchedule::default()
+            },
+        ] {
+            builder.set_schedule(schedule);
+            let other = builder.build_stages(gpu(), &geometry).unwrap();
+            assert!(other.working == tree.working, "{settings:?}, {schedule:?}");
+        }
+        builder.set_schedule(RoundSchedule::default());
+        phased_trees.push(tree);
     }
-    builder.set_schedule(RoundSchedule::default());
+    let [by_phase, bounded] = &phased_trees[..] else {
+        unreachable!("two phased settings")
+    };
     assert!(
         by_phase.working != bottom_up.working,
         "the phased rounds built the bottom-up rounds' tree"
     );
-    // The same with treelets the depth bound cut short, which teams finish from the subsets'
-    // costs of their DP and lone invocations by searching their full set's partition.
-    builder.settings = TreeletSettings {
-        first_round_phases: Some(5),
-        ..phased(7, 4, 4)
-    };
-    let bounded = builder.build_stages(gpu(), &geometry).unwrap();
-    builder.set_schedule(RoundSchedule {
-        team_below: Some(u32::MAX),
-        ..RoundSchedule::default()
-    });
-    let by_teams = builder.build_stages(gpu(), &geometry).unwrap();
-    builder.set_schedule(RoundSchedule::default());
-    assert!(by_teams.working == bounded.working, "teams, P = 4");
     assert!(
         bounded.working != by_phase.working,
         "P = 4 built the tree of P = 7"
