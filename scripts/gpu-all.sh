@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Everything a lent GPU is asked to measure, in one `device` call that fits a short lease, step by
 # step in this order (the trace's correctness and the build's figures first): the test binaries
-# ("tests"), the phased rounds beside the bottom-up ones ("phases"; PHASE_SCENES), teams of 32
+# ("tests"), each kernel's registers and spills from the GPU's compiler ("kernelstats", when
+# `bash scripts/shader-stats.sh pack` packed the example), the phased rounds beside the
+# bottom-up ones ("phases"; PHASE_SCENES), teams of 32
 # invocations per treelet in the dispatched levels, in the overlapped rounds' dispatched waves and
 # in the climb, each threshold beside none ("teams"; TEAM_SCENES), the treelet rounds' lowest
 # levels per subtree at each height beside by level ("subtrees"), every build with wgpu's indirect validation on and off ("indirect"), the
@@ -17,7 +19,8 @@
 # so that the whole run ends within BUDGET seconds (default 500; STEPS picks some of the steps, e.g.
 # STEPS="tests schedules"). After every step the results so far are packed into $OUT/results.tar.gz,
 # so a call stopped at its limit still brings back what ran. A summary is printed last.
-# Here, first:   bash ../shared/gpu/pack.sh,   bash scripts/gpu-probe.sh build,
+# Here, first:   bash ../shared/gpu/pack.sh,   bash scripts/shader-stats.sh pack,
+#   bash scripts/gpu-probe.sh build,
 #   bash scripts/gpu-variants.sh build   and   bash scripts/gpu-extras.sh pack   (without the last,
 #   the binaries overrun the device tool's 64 MiB carry)
 # (optionally also a baseline binary: xz -c OLD/treelet > .gpu/base-treelet.xz, timed beside the
@@ -38,7 +41,7 @@ save() { tar -C $res -czf "$final/results.tar.gz" .; }
 step() {
   local name=$1 cap=$2 left
   shift 2
-  case " ${STEPS:-tests phases teams subtrees indirect layouts scaling schedules variants widelevels probe profile kernels} " in
+  case " ${STEPS:-tests kernelstats phases teams subtrees indirect layouts scaling schedules variants widelevels probe profile kernels} " in
     *" $name "*) ;;
     *) return ;;
   esac
@@ -186,6 +189,16 @@ tests() {
 }
 export -f tests
 step tests 150 bash -c tests
+# The GPU compiler's registers, spills and local memory per kernel (README, "Kernel statistics"),
+# for treelets of 7 and 8 leaves, when `bash scripts/shader-stats.sh pack` packed the example.
+kernel_stats() {
+  xz -dc .gpu/shader-stats.xz > $work/shader-stats && chmod +x $work/shader-stats
+  $work/shader-stats && $work/shader-stats treelets waves subtrees TREELET_SIZE=8
+}
+export -f kernel_stats
+if [ -f .gpu/shader-stats.xz ]; then
+  step kernelstats 40 bash -c kernel_stats
+fi
 step phases 170 bash -c phases
 step teams 150 bash -c teams
 step subtrees 120 bash -c subtrees
@@ -290,7 +303,7 @@ for name in ("scaling.jsonl", "baseline.jsonl"):
                                               for t in tuning["trials"] if t["other_tree"] or t.get("error"))
                      if any(t["other_tree"] or t.get("error") for t in tuning["trials"]) else ""))
 PY
-for f in probe variants layouts profile kernels schedules; do
+for f in kernelstats probe variants layouts profile kernels schedules; do
   echo "--- $f (tail)"
   tail -n 40 $res/$f.txt 2>/dev/null
 done
