@@ -16,8 +16,10 @@
 //      increasing order, the first of equal costs kept). Written out per treelet size
 //      (`subset_costs`, generated: treelet_dp_unrolled.wgsl), so that the costs are values in
 //      registers, not words of a private array indexed by S and P; they are also stored in
-//      `dp_cost` for step 4. a(S) and t(S) come from the boxes and counts of S's two halves
-//      (leaves 0-3 and 4-7), tabulated once per treelet;
+//      `dp_cost` for step 4. a(S) and t(S) come from S's box and count, each a value made from
+//      S without its lowest leaf and that leaf: no table of subset boxes (tables of the 16
+//      subsets of each half of the leaves are ~220 words, and with them the DP spilled:
+//      `scripts/shader-stats.sh`, README "Kernel statistics");
 //   4. if the optimal cost is lower than the current one, the new topology is written back
 //      breadth-first (left child = the best P, right = S\P), reusing the treelet's internal
 //      nodes in formation order (the root keeps its index), with boxes, N, C and parent links.
@@ -66,51 +68,54 @@ fn subset_cost(s: u32) -> f32 {
     return dp_cost[s - 1u];
 }
 
-// Boxes and primitive counts of the subsets of leaves 0-3 (`low_*[t]`, t < 16) and of leaves 4-7
-// (`high_*[t]`: leaves 4 + bits of t): a subset's box is the union of one entry of each.
-var<private> low_min: array<vec3<f32>, 16>;
-var<private> low_max: array<vec3<f32>, 16>;
-var<private> low_prims: array<u32, 16>;
-var<private> high_min: array<vec3<f32>, 16>;
-var<private> high_max: array<vec3<f32>, 16>;
-var<private> high_prims: array<u32, 16>;
+// A subset of the treelet's leaves: its box and primitive count.
+struct SubsetBox {
+    min: vec3<f32>,
+    max: vec3<f32>,
+    prims: u32,
+}
 
-// Fills the half tables from the leaves (entry t extends entry t without its lowest bit).
-fn build_half_tables() {
-    low_min[0] = vec3<f32>(F32_MAX);
-    low_max[0] = vec3<f32>(-F32_MAX);
-    low_prims[0] = 0u;
-    high_min[0] = vec3<f32>(F32_MAX);
-    high_max[0] = vec3<f32>(-F32_MAX);
-    high_prims[0] = 0u;
-    for (var t = 1u; t < 16u; t++) {
-        let rest = t & (t - 1u);
-        let i = firstTrailingBit(t);
-        let j = min(i + 4u, MAX_TREELET - 1u);
-        low_min[t] = min(low_min[rest], leaf_min[i]);
-        low_max[t] = max(low_max[rest], leaf_max[i]);
-        low_prims[t] = low_prims[rest] + leaf_prims[i];
-        high_min[t] = min(high_min[rest], leaf_min[j]);
-        high_max[t] = max(high_max[rest], leaf_max[j]);
-        high_prims[t] = high_prims[rest] + leaf_prims[j];
+// `b` united with the leaves first..=last of subset s, highest first. The loop runs over every
+// leaf of the range whatever s holds, so that the leaves' arrays are indexed by the loop alone.
+fn unite_highest_first(s: u32, first: u32, last: u32, b: SubsetBox) -> SubsetBox {
+    var out = b;
+    for (var i = last; i >= first && i <= last; i--) {
+        let take = ((s >> i) & 1u) != 0u;
+        out.min = select(out.min, min(out.min, leaf_min[i]), take);
+        out.max = select(out.max, max(out.max, leaf_max[i]), take);
+        out.prims += select(0u, leaf_prims[i], take);
     }
+    return out;
 }
 
-fn subset_min(s: u32) -> vec3<f32> {
-    return min(low_min[s & 15u], high_min[s >> 4u]);
+const NO_BOX = SubsetBox(vec3<f32>(F32_MAX), vec3<f32>(-F32_MAX), 0u);
+
+// The box of subset s for the DP's costs: its leaves united highest first (box(S) = box(S without
+// its lowest leaf) ∪ its lowest leaf), as the written-out DP unites them (treelet_dp_unrolled.wgsl).
+fn dp_subset_box(s: u32) -> SubsetBox {
+    return unite_highest_first(s, 0u, MAX_TREELET - 1u, NO_BOX);
 }
 
-fn subset_max(s: u32) -> vec3<f32> {
-    return max(low_max[s & 15u], high_max[s >> 4u]);
+// The box of subset s for the write-back, united as the team's tables unite it
+// (treelet_team.wgsl: leaves 0-3 highest first, leaves 4-7 the same, then the two halves), so
+// that lone invocations and teams write the same boxes, also in the sign of a zero. No tables
+// here: with them beside the DP's ~127 live costs the DP spilled (README, "Kernel statistics").
+fn subset_box(s: u32) -> SubsetBox {
+    let low = unite_highest_first(s, 0u, 3u, NO_BOX);
+    let high = unite_highest_first(s, 4u, MAX_TREELET - 1u, NO_BOX);
+    return SubsetBox(min(low.min, high.min), max(low.max, high.max), low.prims + high.prims);
 }
 
-fn subset_prims(s: u32) -> u32 {
-    return low_prims[s & 15u] + high_prims[s >> 4u];
+// c(S) of a subset of at least two leaves, of box [lo, hi] and `prims` primitives, whose best
+// partition costs `best`.
+fn internal_cost(lo: vec3<f32>, hi: vec3<f32>, prims: u32, best: f32) -> f32 {
+    return combine_cost(surface_area(lo, hi, params.zero), prims, best);
 }
 
-// c(S) of a subset of at least two leaves whose best partition costs `best`.
+// The same for subset s, its box as the DP unites it.
 fn internal_subset_cost(s: u32, best: f32) -> f32 {
-    return combine_cost(surface_area(subset_min(s), subset_max(s), params.zero), subset_prims(s), best);
+    let b = dp_subset_box(s);
+    return internal_cost(b.min, b.max, b.prims, best);
 }
 
 #include "treelet_dp_unrolled.wgsl"
@@ -316,7 +321,8 @@ fn write_back(root: u32, full_split: u32, full_cost: f32) {
             split = best_partition(s).x;
             cost = subset_cost(s);
         }
-        write_entry(head, split, cost, subset_min(s), subset_max(s), subset_prims(s));
+        let b = subset_box(s);
+        write_entry(head, split, cost, b.min, b.max, b.prims);
     }
     store_next_levels();
 }
@@ -326,7 +332,6 @@ fn write_back(root: u32, full_split: u32, full_cost: f32) {
 // computed alongside, and unused); one of 2 leaves has no other topology.
 fn optimize_treelet(root: u32) {
     let current = form_treelet(root);
-    build_half_tables();
     var best = subset_costs();
     let full = treelet_full_set();
     if treelet_leaves < TREELET_SIZE {

@@ -135,6 +135,14 @@ fn set_child(child: ptr<function, array<BvhNode, 8>>, child_index: ptr<function,
 // start).
 const NO_SCORE: f32 = -3.4e38;
 
+// A child's scores for slots 0-3 and 4-7: Σ_a ±(centre_child − centre_node)_a, + where bit a of
+// the slot is set (the CPU twin's sums, in its order).
+fn slot_scores(c: BvhNode, centre: vec3<f32>) -> array<vec4<f32>, 2> {
+    let d = (c.min + c.max) - centre;
+    let xy = vec4<f32>(-d.x, d.x, -d.x, d.x) + vec4<f32>(-d.y, -d.y, d.y, d.y);
+    return array<vec4<f32>, 2>(xy + vec4<f32>(-d.z), xy + vec4<f32>(d.z));
+}
+
 // A wide node before its children and references are allocated: the node (child_base and
 // prim_base 0), its internal children and references, and per slot the binary child's index
 // (internal) or first reference (leaf).
@@ -229,20 +237,13 @@ fn draft_wide_node(source: u32) -> WideDraft {
 
     // Octant slots, best (child, slot) pair first (the first child, then the first slot, of
     // equal scores). Each child's eight scores Σ_a ±offset_a (+ where bit a of the slot is set)
-    // are computed once, as two vec4 of slots 0-3 and 4-7 (the CPU twin's sums, in its order);
-    // a round takes the best free score of each unplaced child, then the first free slot of the
-    // best child with that score: the pairs of scanning every (child, free slot) pair in order.
-    // The loops run over all eight children (those past `count` count as placed), so that no
-    // array is indexed by a value a lane computes: such an array lives in memory (a GPU's local
-    // memory, a gather per lane on lavapipe).
-    var score_low: array<vec4<f32>, 8>;
-    var score_high: array<vec4<f32>, 8>;
-    for (var j = 0u; j < 8u; j++) {
-        let d = (child[j].min + child[j].max) - centre;
-        let xy = vec4<f32>(-d.x, d.x, -d.x, d.x) + vec4<f32>(-d.y, -d.y, d.y, d.y);
-        score_low[j] = xy + vec4<f32>(-d.z);
-        score_high[j] = xy + vec4<f32>(d.z);
-    }
+    // are two vec4 of slots 0-3 and 4-7 (`slot_scores`), computed again in every round instead
+    // of kept: 64 fewer live words (RADV's compiler: 192 -> 144 registers,
+    // `scripts/shader-stats.sh`). A round takes the best free score of each unplaced child, then
+    // the first free slot of the best child with that score: the pairs of scanning every (child,
+    // free slot) pair in order. The loops run over all eight children (those past `count` count
+    // as placed), so that no array is indexed by a value a lane computes: such an array lives in
+    // memory (a GPU's local memory, a gather per lane on lavapipe).
     // Three bits per child: its slot.
     var slot_bits = 0u;
     var free_low = vec4<bool>(true);
@@ -254,15 +255,16 @@ fn draft_wide_node(source: u32) -> WideDraft {
         var best_low = vec4<f32>(0.0);
         var best_high = vec4<f32>(0.0);
         for (var j = 0u; j < 8u; j++) {
-            let low = select(vec4<f32>(-F32_MAX), score_low[j], free_low);
-            let high = select(vec4<f32>(-F32_MAX), score_high[j], free_high);
+            let scores = slot_scores(child[j], centre);
+            let low = select(vec4<f32>(-F32_MAX), scores[0], free_low);
+            let high = select(vec4<f32>(-F32_MAX), scores[1], free_high);
             let both = max(low, high);
             let score = max(max(both.x, both.y), max(both.z, both.w));
             let better = ((placed >> j) & 1u) == 0u && score > best_score;
             best_score = select(best_score, score, better);
             best_child = select(best_child, j, better);
-            best_low = select(best_low, score_low[j], better);
-            best_high = select(best_high, score_high[j], better);
+            best_low = select(best_low, scores[0], better);
+            best_high = select(best_high, scores[1], better);
         }
         let low = free_low & (best_low == vec4<f32>(best_score));
         let high = free_high & (best_high == vec4<f32>(best_score));

@@ -19,6 +19,12 @@
 //! instructions over costs in local memory. Both find the same costs and partitions (the same
 //! operations in the same order), so the same trees.
 //!
+//! Each subset's box and primitive count are values too (`lo<S>`, `hi<S>`, `t<S>`): the subset
+//! without its lowest leaf's, united with that leaf's (`dp_subset_box`'s order). Only a few are
+//! live at a time, as the subsets sharing a box come one after another: with the boxes looked up
+//! in tables of the halves of the leaves instead, RADV's compiler spilled 1171 registers of
+//! `treelets_optimize` for 7 leaves, and spills none this way (`scripts/shader-stats.sh`).
+//!
 //! `subset_costs()` stores every proper subset's cost in `dp_cost` (the write-back searches the
 //! best partitions of the new internal nodes there again) and returns the full set's best
 //! partition and its children's cost, as `best_partition` does. The order of operations is the
@@ -111,8 +117,26 @@ fn wgsl(m: u32) -> String {
     for s in 1..full {
         if s.count_ones() == 1 {
             let leaf = s.trailing_zeros();
-            writeln!(out, "    let c{s} = leaf_cost[{leaf}];").unwrap();
+            writeln!(
+                out,
+                "    let c{s} = leaf_cost[{leaf}];\n    \
+                 let lo{s} = leaf_min[{leaf}];\n    \
+                 let hi{s} = leaf_max[{leaf}];\n    \
+                 let t{s} = leaf_prims[{leaf}];"
+            )
+            .unwrap();
         } else {
+            // The box united highest leaf first, as `dp_subset_box` unites it: the subset
+            // without its lowest leaf, then that leaf.
+            let rest = s & (s - 1);
+            let lowest = s & !rest;
+            writeln!(
+                out,
+                "    let lo{s} = min(lo{rest}, lo{lowest});\n    \
+                 let hi{s} = max(hi{rest}, hi{lowest});\n    \
+                 let t{s} = t{rest} + t{lowest};"
+            )
+            .unwrap();
             let mut parts = partitions(s);
             let first = parts
                 .next()
@@ -121,7 +145,11 @@ fn wgsl(m: u32) -> String {
             for p in parts {
                 writeln!(out, "    b{s} = min(b{s}, c{p} + c{});", s ^ p).unwrap();
             }
-            writeln!(out, "    let c{s} = internal_subset_cost({s}u, b{s});").unwrap();
+            writeln!(
+                out,
+                "    let c{s} = internal_cost(lo{s}, hi{s}, t{s}, b{s});"
+            )
+            .unwrap();
         }
         writeln!(out, "    dp_cost[{}] = c{s};", s - 1).unwrap();
     }
