@@ -188,4 +188,36 @@ mod tests {
             assert_eq!(body.matches("dp_cost[").count() as u32, (1 << m) - 2);
         }
     }
+
+    /// Every subset's box is its rest's (the subset without its lowest leaf) united with its
+    /// lowest leaf's, the order `dp_subset_box` unites them in: each before its first use.
+    #[test]
+    fn every_subset_box_unites_its_rest_and_lowest_leaf() {
+        for m in MIN_TREELET_SIZE..=MAX_TREELET_SIZE {
+            let body = wgsl(m);
+            let at = |line: &str| {
+                body.find(line)
+                    .unwrap_or_else(|| panic!("treelet size {m}: no `{line}`"))
+            };
+            for s in 1u32..(1 << m) - 1 {
+                let rest = s & (s - 1);
+                let made = if rest == 0 {
+                    at(&format!("let lo{s} = leaf_min[{}];", s.trailing_zeros()))
+                } else {
+                    let lowest = s & !rest;
+                    let made = at(&format!("let lo{s} = min(lo{rest}, lo{lowest});"));
+                    at(&format!("let hi{s} = max(hi{rest}, hi{lowest});"));
+                    at(&format!("let t{s} = t{rest} + t{lowest};"));
+                    assert!(
+                        at(&format!("let lo{rest} ")) < made
+                            && at(&format!("let lo{lowest} ")) < made
+                    );
+                    made
+                };
+                if rest != 0 {
+                    assert!(made < at(&format!("internal_cost(lo{s}, hi{s}, t{s}, b{s})")));
+                }
+            }
+        }
+    }
 }
