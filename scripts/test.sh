@@ -2,8 +2,9 @@
 # Runs treelet's test suite: installs what it needs (Vulkan loader + Mesa's software driver when no
 # GPU is present, Xvfb, Rust), then checks formatting and lints, runs every test on the GPU adapter
 # found (the software driver in CI), builds the core library without the viewer and runs its
-# example, compiles every kernel with a GPU compiler (Mesa's RADV without a GPU, where installed;
-# always in CI), and opens the viewer once (scripts/viewer-smoke.sh).
+# example, compiles every kernel with a GPU compiler and checks that none spills (Mesa's RADV
+# without a GPU, where installed; always in CI), and opens the viewer once
+# (scripts/viewer-smoke.sh).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
@@ -20,11 +21,13 @@ cargo test --release
 cargo check --release --no-default-features --lib --examples
 cargo run --release --example build_bvh
 # Every kernel compiles with a GPU driver's compiler too (RADV with a null device; README, "Kernel
-# statistics"), and there the lone treelet DP of 7 leaves keeps its costs in registers.
+# statistics"), and there none spills a vector register (treelets of 7 leaves).
 if [ -f /usr/share/vulkan/icd.d/radeon_icd.json ]; then
   bash scripts/shader-stats.sh > target/shader-stats.txt
-  grep -q "^treelets_optimize: .*Spilled VGPRs=0," target/shader-stats.txt ||
-    { echo "error: treelets_optimize spills registers on RADV (target/shader-stats.txt)"; exit 1; }
+  if grep -E "Spilled VGPRs=[1-9]" target/shader-stats.txt; then
+    echo "error: the kernels above spill registers on RADV (target/shader-stats.txt)"
+    exit 1
+  fi
 elif [ -n "${CI:-}" ]; then
   echo "error: no RADV (mesa-vulkan-drivers) to compile the kernels with"; exit 1
 else

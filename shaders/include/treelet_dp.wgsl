@@ -216,14 +216,19 @@ fn treelet_full_set() -> u32 {
     return (1u << treelet_leaves) - 1u;
 }
 
-// Step 4's breadth-first queue: the subsets still to write and the node each goes to (entry 0:
-// the full set, the root), `queued` entries so far; per written entry also its primitive count
-// and its children, each as a code: leaf i (< MAX_TREELET) or entry j (MAX_TREELET + j) (step 5).
-var<private> queue_set: array<u32, MAX_TREELET>;
-var<private> queue_node: array<u32, MAX_TREELET>;
+// Step 4's breadth-first queue: the subsets still to write, entry e going to internal_node[e]
+// (entry 0: the full set, the root), `queued` entries so far; per written entry also its primitive
+// count and its children, each as a code: leaf i (< MAX_TREELET) or entry j (MAX_TREELET + j)
+// (step 5). A variable of the write-back, not of the module: a private variable is zeroed when
+// the invocation starts, so its registers would be held through the DP.
+struct WriteQueue {
+    subsets: array<u32, MAX_TREELET>,
+    prims: array<u32, MAX_TREELET>,
+    children: array<vec2<u32>, MAX_TREELET>,
+}
+// Entries the last write-back queued (0 when the treelet kept its topology; the overlapped
+// rounds' `finish_entry` reads it).
 var<private> queued: u32;
-var<private> written_prims: array<u32, MAX_TREELET>;
-var<private> written_children: array<vec2<u32>, MAX_TREELET>;
 
 // The code of a write-back's child `part` (a subset of the leaves): the leaf, or the entry it is
 // queued as (`queued`).
@@ -235,7 +240,7 @@ fn child_code(part: u32, queued: u32) -> u32 {
 // the treelet leaves' levels (all loaded at once: no load waits for another) and the entries'
 // own; no node data is read back. Nothing without a next round (its levels would all be 0, and
 // nothing reads them: the last round, the overlapped and the phased rounds).
-fn store_next_levels() {
+fn store_next_levels(queue: ptr<function, WriteQueue>) {
     if params.next_gamma == NO_NEXT_ROUND {
         return;
     }
@@ -247,12 +252,12 @@ fn store_next_levels() {
     for (var e = queued; e > 0u; e--) {
         let entry = e - 1u;
         var level = 0u;
-        if written_prims[entry] >= params.next_gamma {
-            let children = written_children[entry];
+        if (*queue).prims[entry] >= params.next_gamma {
+            let children = (*queue).children[entry];
             level = 1u + max(level_of[children.x], level_of[children.y]);
         }
         level_of[MAX_TREELET + entry] = level;
-        next_levels[queue_node[entry]] = level;
+        next_levels[internal_node[entry]] = level;
     }
 }
 
@@ -273,19 +278,18 @@ fn store_root_next_level(root: u32) {
     next_levels[root] = level;
 }
 
-// Step 4, start: the full set goes to the root.
-fn begin_write_back(root: u32) {
-    queue_set[0] = treelet_full_set();
-    queue_node[0] = root;
+// Step 4, start: the full set goes to the root (internal_node[0]).
+fn begin_write_back(queue: ptr<function, WriteQueue>) {
+    (*queue).subsets[0] = treelet_full_set();
     queued = 1u;
 }
 
 // Step 4 for queue entry `head`: its node gets the children `split` and the rest of its subset
 // (a treelet leaf, or the next internal node of the treelet, queued), the box [lo, hi], `prims`
 // and `cost`; its count and children are kept for step 5.
-fn write_entry(head: u32, split: u32, cost: f32, lo: vec3<f32>, hi: vec3<f32>, prims: u32) {
-    let s = queue_set[head];
-    let node = queue_node[head];
+fn write_entry(queue: ptr<function, WriteQueue>, head: u32, split: u32, cost: f32, lo: vec3<f32>, hi: vec3<f32>, prims: u32) {
+    let s = (*queue).subsets[head];
+    let node = internal_node[head];
     let parts = array<u32, 2>(split, s ^ split);
     var child = array<u32, 2>(0u, 0u);
     var code = vec2<u32>(0u);
@@ -296,8 +300,7 @@ fn write_entry(head: u32, split: u32, cost: f32, lo: vec3<f32>, hi: vec3<f32>, p
             child[k] = leaf_node[firstTrailingBit(part)];
         } else {
             child[k] = internal_node[queued];
-            queue_set[queued] = part;
-            queue_node[queued] = child[k];
+            (*queue).subsets[queued] = part;
             queued++;
         }
         parents[child[k]] = node;
@@ -305,16 +308,17 @@ fn write_entry(head: u32, split: u32, cost: f32, lo: vec3<f32>, hi: vec3<f32>, p
     nodes[node] = BvhNode(lo, child[0], hi, child[1]);
     prim_counts[node] = prims;
     costs[node] = cost;
-    written_prims[head] = prims;
-    written_children[head] = code;
+    (*queue).prims[head] = prims;
+    (*queue).children[head] = code;
 }
 
 // Steps 4 and 5: the new topology of the treelet below `root` from the DP's costs (`full_split`:
 // the full set's best partition, `full_cost`: its cost).
-fn write_back(root: u32, full_split: u32, full_cost: f32) {
-    begin_write_back(root);
+fn write_back(full_split: u32, full_cost: f32) {
+    var queue: WriteQueue;
+    begin_write_back(&queue);
     for (var head = 0u; head < queued; head++) {
-        let s = queue_set[head];
+        let s = queue.subsets[head];
         var split = full_split;
         var cost = full_cost;
         if head != 0u {
@@ -322,9 +326,9 @@ fn write_back(root: u32, full_split: u32, full_cost: f32) {
             cost = subset_cost(s);
         }
         let b = subset_box(s);
-        write_entry(head, split, cost, b.min, b.max, b.prims);
+        write_entry(&queue, head, split, cost, b.min, b.max, b.prims);
     }
-    store_next_levels();
+    store_next_levels(&queue);
 }
 
 // Steps 1-5 for the treelet rooted at `root`. A treelet of fewer leaves than treelet_size takes
@@ -339,7 +343,7 @@ fn optimize_treelet(root: u32) {
     }
     let full_cost = internal_subset_cost(full, bitcast<f32>(best.y));
     if treelet_leaves > 2u && full_cost < current {
-        write_back(root, best.x, full_cost);
+        write_back(best.x, full_cost);
     } else {
         store_root_next_level(root);
     }

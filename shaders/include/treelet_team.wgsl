@@ -80,21 +80,22 @@ fn team_form(root: u32, team: u32) -> f32 {
 
 // Steps 4 and 5 (lane 0): treelet_dp.wgsl's write_back, each internal subset's partition and
 // cost taken from the DP, its box from the team's half tables.
-fn team_write_back(root: u32, team: u32, full_split: u32, full_cost: f32) {
+fn team_write_back(team: u32, full_split: u32, full_cost: f32) {
     let subsets = team * TEAM_SUBSETS;
     let halves = team * 16u;
-    begin_write_back(root);
+    var queue: WriteQueue;
+    begin_write_back(&queue);
     for (var head = 0u; head < queued; head++) {
-        let s = queue_set[head];
+        let s = queue.subsets[head];
         var split = full_split;
         var cost = full_cost;
         if head != 0u {
             split = team_split[subsets + s];
             cost = team_cost[subsets + s];
         }
-        write_entry(head, split, cost, team_subset_min(halves, s), team_subset_max(halves, s), team_subset_prims(halves, s));
+        write_entry(&queue, head, split, cost, team_subset_min(halves, s), team_subset_max(halves, s), team_subset_prims(halves, s));
     }
-    store_next_levels();
+    store_next_levels(&queue);
 }
 
 // Steps 1-5 for the treelet rooted at `root`, by the invocation in lane `lane` of team `team`.
@@ -236,7 +237,7 @@ fn optimize_treelet_team(root: u32, has_treelet: bool, team: u32, lane: u32) {
             full_cost = team_cost[subsets + full];
         }
         if treelet_leaves > 2u && full_cost < current {
-            team_write_back(root, team, full_split, full_cost);
+            team_write_back(team, full_split, full_cost);
         } else {
             store_root_next_level(root);
         }

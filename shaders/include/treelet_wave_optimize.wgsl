@@ -10,10 +10,10 @@ fn optimize_entry(entry: u32, wave: u32) {
     finish_entry(entry, wave);
 }
 
-// What the treelet of `entry` finished in wave `wave` (its write-back's queue, `queued` entries,
-// none when it kept its topology): its root, in its round; the internal nodes it rewrote, in its
-// round and the ones before (their place in the sequential rounds came first); and the
-// candidates it may have made.
+// What the treelet of `entry` finished in wave `wave` (the internal nodes its write-back queued,
+// internal_node[1..queued], none when it kept its topology): its root, in its round; the
+// internal nodes it rewrote, in its round and the ones before (their place in the sequential
+// rounds came first); and the candidates it may have made.
 fn finish_entry(entry: u32, wave: u32) {
     let node = entry & NODE_MASK;
     let round = entry >> ROUND_SHIFT;
@@ -21,7 +21,7 @@ fn finish_entry(entry: u32, wave: u32) {
     done[node * rounds + round] = wave;
     let next = round + 1u;
     for (var e = 1u; e < queued; e++) {
-        let x = queue_node[e];
+        let x = internal_node[e];
         for (var r = 0u; r <= round; r++) {
             if done[x * rounds + r] == 0u {
                 done[x * rounds + r] = wave;
