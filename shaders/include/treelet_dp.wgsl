@@ -76,7 +76,8 @@ struct SubsetBox {
 }
 
 // `b` united with the leaves first..=last of subset s, highest first. The loop runs over every
-// leaf of the range whatever s holds, so that the leaves' arrays are indexed by the loop alone.
+// leaf of the range whatever s holds, so that the leaves' arrays are indexed by the loop alone
+// (`i <= last` ends it when i wraps below 0).
 fn unite_highest_first(s: u32, first: u32, last: u32, b: SubsetBox) -> SubsetBox {
     var out = b;
     for (var i = last; i >= first && i <= last; i--) {

@@ -230,11 +230,13 @@ fn optimize_treelet_team(root: u32, has_treelet: bool, team: u32, lane: u32) {
     // fewer leaves (phased rounds) finds its own among the subsets the DP stored.
     if has_treelet && lane == 0u {
         let full = treelet_full_set();
-        let full_area = surface_area(team_subset_min(halves, full), team_subset_max(halves, full), params.zero);
-        var full_cost = combine_cost(full_area, team_subset_prims(halves, full), full_best);
+        var full_cost: f32;
         if treelet_leaves < m {
             full_split = team_split[subsets + full];
             full_cost = team_cost[subsets + full];
+        } else {
+            let full_area = surface_area(team_subset_min(halves, full), team_subset_max(halves, full), params.zero);
+            full_cost = combine_cost(full_area, team_subset_prims(halves, full), full_best);
         }
         if treelet_leaves > 2u && full_cost < current {
             team_write_back(team, full_split, full_cost);
