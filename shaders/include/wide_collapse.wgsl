@@ -15,9 +15,13 @@
 //    per child lo = the largest q with origin + q·2^e ≤ min, hi = the smallest with ≥ max (f32
 //    arithmetic; the products are exact, so fused or not every device rounds alike).
 // 4. Output: internal children get consecutive wide nodes from an atomic counter (their sources
-//    are written for the next level), leaf children's references are copied to consecutive
-//    entries of `wide_prims`. A workgroup emits its nodes in waves and allocates for a wave at
-//    once (`emit_wave_node`): one device atomic per counter and wave, not per node.
+//    are written for the next level), leaf children's references get consecutive entries of
+//    `wide_prims`, each holding the reference's position in the binary tree's `prim_indices`:
+//    triangles_gather.wgsl, a dispatch of one invocation per reference, replaces it with the
+//    triangle's index. A store per reference, no load: a copy here loaded each index before
+//    storing it, a round trip to memory per reference in a wide node's chain of dependent steps.
+//    A workgroup emits its nodes in waves and allocates for a wave at once (`emit_wave_node`):
+//    one device atomic per counter and wave, not per node.
 // Every decision uses additions, exact products or `unfused` ones: the tree is the same on every
 // device, up to the numbering of nodes and reference blocks (allocation order).
 #include "bvh_node.wgsl"
@@ -47,20 +51,21 @@ const COLLAPSE_OPTIMAL: u32 = 1u;
 
 @group(0) @binding(0) var<uniform> params: WideParams;
 @group(0) @binding(1) var<storage, read> nodes: array<BvhNode>;
-@group(0) @binding(2) var<storage, read> prim_indices: array<u32>;
-@group(0) @binding(3) var<storage, read_write> wide_nodes: array<WideNode>;
-@group(0) @binding(4) var<storage, read_write> wide_prims: array<u32>;
+@group(0) @binding(2) var<storage, read_write> wide_nodes: array<WideNode>;
+// Per reference, its position in the binary tree's `prim_indices` (triangles_gather.wgsl replaces
+// it with the triangle's index).
+@group(0) @binding(3) var<storage, read_write> wide_prims: array<u32>;
 // Binary node of each wide node.
-@group(0) @binding(5) var<storage, read_write> wide_sources: array<u32>;
+@group(0) @binding(4) var<storage, read_write> wide_sources: array<u32>;
 // [0] wide nodes allocated, [1] references written, [2] capacity overflows.
-@group(0) @binding(6) var<storage, read_write> wide_counters: array<atomic<u32>>;
+@group(0) @binding(5) var<storage, read_write> wide_counters: array<atomic<u32>>;
 // Level records, 8 words per level: [workgroups x, y, z, first node, end node, 0, 0, 0]; even
 // levels in one buffer, odd in the other, so that a level dispatch reads its own record (and
 // its indirect arguments) from one and sizes the next level in the other.
-@group(0) @binding(7) var<storage, read> this_level: array<u32>;
-@group(0) @binding(8) var<storage, read_write> next_level: array<atomic<u32>>;
+@group(0) @binding(6) var<storage, read> this_level: array<u32>;
+@group(0) @binding(7) var<storage, read_write> next_level: array<atomic<u32>>;
 // The optimal collapse's choices per binary node (costs_climb.wgsl; unused by the greedy one).
-@group(0) @binding(9) var<storage, read> choices: array<u32>;
+@group(0) @binding(8) var<storage, read> choices: array<u32>;
 
 const RECORD_WORDS: u32 = 8u;
 const EMIT_WORKGROUP: u32 = 64u;
@@ -318,7 +323,8 @@ fn draft_wide_node(source: u32) -> WideDraft {
 }
 
 // Writes `draft` as wide node `w`, its internal children's sources from `child_base` and its
-// leaves' references from `prim_base`, both in slot order (step 4).
+// leaves' references (their positions in `prim_indices`) from `prim_base`, both in slot order
+// (step 4).
 fn commit_wide_node(w: u32, draft: WideDraft, prim_base: u32, child_base: u32) {
     var out = draft.node;
     out.prim_base = select(0u, prim_base, draft.prims > 0u);
@@ -334,7 +340,7 @@ fn commit_wide_node(w: u32, draft: WideDraft, prim_base: u32, child_base: u32) {
             let first = draft.slot_words[s];
             let n = slot_byte(out.leaf_counts, s);
             for (var i = 0u; i < n; i++) {
-                wide_prims[next_prim + i] = prim_indices[first + i];
+                wide_prims[next_prim + i] = first + i;
             }
             next_prim += n;
         }

@@ -7,8 +7,9 @@
 //! of one workgroup; each of the next levels up to `level_dispatches` is an indirect dispatch
 //! whose size the previous level wrote (`wide_nodes_emit`); whatever lies deeper is emitted by
 //! one more indirect dispatch, a subtree per wide node of the next level, depth-first
-//! (`wide_nodes_finish`). Last, `triangles_gather` copies the references' triangles in order for
-//! the traversal. No CPU round trip.
+//! (`wide_nodes_finish`). Last, `triangles_gather` turns the references (positions in the binary
+//! tree's `prim_indices`) into triangle indices and copies their triangles in order for the
+//! traversal. No CPU round trip.
 
 use super::convert::max_wide_nodes;
 use super::costs_climb::{CostParams, COSTS_CLIMB};
@@ -188,10 +189,9 @@ impl WideConverter {
             );
         }
         // Level L reads its record from records[L % 2] and writes the next into the other.
-        let buffers = |level: u32| -> [&wgpu::Buffer; 9] {
+        let buffers = |level: u32| -> [&wgpu::Buffer; 8] {
             [
                 &tree.nodes,
-                &tree.prim_indices,
                 &wide.nodes,
                 &wide.prim_indices,
                 &wide.sources,
@@ -243,6 +243,7 @@ impl WideConverter {
             prims,
             &[
                 &geometry.triangles,
+                &tree.prim_indices,
                 &wide.prim_indices,
                 &wide.counters,
                 &wide.triangles,

@@ -24,4 +24,4 @@ pub struct WideParams {
 const _: () = assert!(std::mem::size_of::<WideParams>() == 32);
 
 kernel!(pub WIDE_NODES_EMIT: WideParams = "wide_nodes_emit"::"main", [64, 1, 1],
-    [Read, Read, ReadWrite, ReadWrite, ReadWrite, ReadWrite, Read, ReadWrite, Read]);
+    [Read, ReadWrite, ReadWrite, ReadWrite, ReadWrite, Read, ReadWrite, Read]);

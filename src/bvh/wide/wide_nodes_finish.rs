@@ -6,4 +6,4 @@ use super::wide_nodes_emit::WideParams;
 use crate::gpu::kernel;
 
 kernel!(pub WIDE_NODES_FINISH: WideParams = "wide_nodes_finish"::"main", [64, 1, 1],
-    [Read, Read, ReadWrite, ReadWrite, ReadWrite, ReadWrite, Read, ReadWrite, Read]);
+    [Read, ReadWrite, ReadWrite, ReadWrite, ReadWrite, Read, ReadWrite, Read]);
