@@ -25,18 +25,20 @@ fn main(
     @builtin(num_workgroups) groups: vec3<u32>,
 ) {
     let first = params.level_first;
+    let group = wid.x + wid.y * groups.x;
+    let i = group * WORKGROUP + lid;
+    // An invocation's root is loaded before the level's size is known (past the level's roots it
+    // is another bucket's, or clamped into the buffer, and unused): both loads go out at once,
+    // where the root's waited for the size, one round trip to memory more before the treelet.
+    let root = roots[first + i];
     if lid == 0u {
         level_size = schedule[params.level - 1u];
     }
     let size = workgroupUniformLoad(&level_size);
-    let group = wid.x + wid.y * groups.x;
     if size < params.team_below {
         let has_treelet = group < size;
         optimize_treelet_team(select(0u, roots[first + min(group, size - 1u)], has_treelet), has_treelet, 0u, lid);
-    } else {
-        let i = group * WORKGROUP + lid;
-        if i < size {
-            optimize_treelet(roots[first + i]);
-        }
+    } else if i < size {
+        optimize_treelet(root);
     }
 }

@@ -26,12 +26,17 @@ fn main(
     @builtin(num_workgroups) nwg: vec3<u32>,
 ) {
     let wave = params.wave;
-    if rounds_stopped(lid) {
+    let i = (wid.x + wid.y * nwg.x) * WAVE_WORKGROUP + lid;
+    // An invocation's candidate is loaded with the wave's state, before the candidate count is
+    // known (past the wave's candidates, or clamped into the buffer, it is unused): one round
+    // trip to memory before the candidate's own loads, where there were three.
+    let candidate = lists[candidates_base(wave) + i];
+    let state = stopped_and_state_word(lid, CANDIDATE_COUNT + (wave & 1u));
+    if state.x != 0u {
         return;
     }
-    let i = (wid.x + wid.y * nwg.x) * WAVE_WORKGROUP + lid;
-    if i < atomicLoad(&wave_state[CANDIDATE_COUNT + (wave & 1u)]) {
-        find_candidate(lists[candidates_base(wave) + i], wave);
+    if i < state.y {
+        find_candidate(candidate, wave);
     }
     if last_workgroup(lid, nwg.x * nwg.y, FIND_TICKET) && lid == 0u {
         let treelets = atomicLoad(&wave_state[OPS_COUNT]);

@@ -25,13 +25,17 @@ fn main(
     @builtin(num_workgroups) nwg: vec3<u32>,
 ) {
     let wave = params.wave;
-    if rounds_stopped(lid) {
+    let group = wid.x + wid.y * nwg.x;
+    let i = group * WAVE_WORKGROUP + lid;
+    // An invocation's entry is loaded with the wave's state, before its treelet count is known
+    // (past the wave's treelets, or clamped into the buffer, it is unused): one round trip to
+    // memory before the treelet, not two.
+    let lone_entry = lists[ops_base() + i];
+    let state = stopped_and_state_word(lid, OPS_COUNT);
+    if state.x != 0u {
         return;
     }
-    // Between two state_word calls (their shared word).
-    workgroupBarrier();
-    let treelets = state_word(lid, OPS_COUNT);
-    let group = wid.x + wid.y * nwg.x;
+    let treelets = state.y;
     if treelets < params.team_below {
         let has_treelet = group < treelets;
         let entry = lists[ops_base() + min(group, max(treelets, 1u) - 1u)];
@@ -40,11 +44,8 @@ fn main(
         if has_treelet && lid == 0u {
             finish_entry(entry, wave);
         }
-    } else {
-        let i = group * WAVE_WORKGROUP + lid;
-        if i < treelets {
-            optimize_entry(lists[ops_base() + i], wave);
-        }
+    } else if i < treelets {
+        optimize_entry(lone_entry, wave);
     }
     if last_workgroup(lid, nwg.x * nwg.y, OPTIMIZE_TICKET) && lid == 0u {
         let candidates = atomicLoad(&wave_state[CANDIDATE_COUNT + ((wave + 1u) & 1u)]);

@@ -8,8 +8,8 @@
 //      (always reached, a root having at least gamma >= treelet_size primitives, except in phased
 //      rounds of P < treelet_size phases, which expand no leaf P − 1 levels below the root and
 //      may end with fewer: `treelet_leaves`, the others empty). Each leaf's node (box and
-//      children) is loaded once, when it joins the treelet: an expansion waits for one load, not
-//      two, and the DP's leaf boxes need none;
+//      children), primitive count and cost are loaded once, together, when it joins the treelet:
+//      an expansion waits for one round trip to memory, not two, and the DP's inputs need none;
 //   3. dynamic programming over the subsets S of the leaves in increasing order (a subset's proper
 //      subsets come first): c(S) = min(Ci·a(S) + min_P (c(P) + c(S\P)), Ct·a(S)·t(S)), each
 //      unordered partition once (P over the non-empty subsets of S without its lowest bit, in
@@ -142,11 +142,21 @@ fn best_partition(s: u32) -> vec2<u32> {
     return vec2<u32>(best_p, bitcast<u32>(best));
 }
 
-// Makes `node` the treelet's leaf i: its box, children and area, from one load of the node; an
-// area of -1 if the formation may not expand it (a tree leaf, or `expandable` false).
+// Makes `node` the treelet's leaf i: its box, children, area, primitive count and cost, from
+// loads that go out together (the DP's inputs come with the formation, not one more round trip to
+// memory after it); an area of -1 if the formation may not expand it (a tree leaf, or
+// `expandable` false). The count and the cost, which the DP reads, are written by selects over
+// every leaf, so that no index a lane computes puts them in memory (RADV: the lone DP's latency
+// estimate 38249 cycles with `leaf_cost[i] = ...`, 34504 with the selects).
 fn take_leaf(i: u32, node: u32, expandable: bool) {
     let n = nodes[node];
     leaf_node[i] = node;
+    let prims = prim_counts[node];
+    let cost = costs[node];
+    for (var t = 0u; t < MAX_TREELET; t++) {
+        leaf_prims[t] = select(leaf_prims[t], prims, t == i);
+        leaf_cost[t] = select(leaf_cost[t], cost, t == i);
+    }
     leaf_min[i] = n.min;
     leaf_max[i] = n.max;
     leaf_children[i] = vec2<u32>(n.left_or_first, n.right_or_count);
@@ -166,13 +176,13 @@ fn form_treelet(root: u32) -> f32 {
     let r = nodes[root];
     root_children = vec2<u32>(r.left_or_first, r.right_or_count);
     root_prims = prim_counts[root];
-    let current = combine_cost(surface_area(r.min, r.max, params.zero), root_prims, costs[r.left_or_first] + costs[r.right_or_count]);
-    costs[root] = current;
     // Phased rounds (params.phases = P): leaves at most P - 1 levels below the root, a bound a
     // treelet of at most P leaves never reaches.
     let max_depth = select(MAX_TREELET, params.phases - 1u, params.phases != 0u);
     take_leaf(0u, r.left_or_first, 1u < max_depth);
     take_leaf(1u, r.right_or_count, 1u < max_depth);
+    let current = combine_cost(surface_area(r.min, r.max, params.zero), root_prims, leaf_cost[0] + leaf_cost[1]);
+    costs[root] = current;
     internal_node[0] = root;
     var depths = 0x11u;
     treelet_leaves = 2u;
@@ -197,11 +207,7 @@ fn form_treelet(root: u32) -> f32 {
         treelet_leaves = count + 1u;
     }
     for (var i = 0u; i < MAX_TREELET; i++) {
-        if i < treelet_leaves {
-            // Both loads at once: the DP does not wait for the costs on its own.
-            leaf_prims[i] = prim_counts[leaf_node[i]];
-            leaf_cost[i] = costs[leaf_node[i]];
-        } else {
+        if i >= treelet_leaves {
             leaf_node[i] = root;
             leaf_min[i] = vec3<f32>(F32_MAX);
             leaf_max[i] = vec3<f32>(-F32_MAX);

@@ -55,6 +55,18 @@ fn rounds_stopped(lid: u32) -> bool {
     return state_word(lid, STOPPED) != 0u;
 }
 
+var<workgroup> state_pair: vec2<u32>;
+
+// The start of a wave's dispatch: whether a wave before found no treelet (x, as rounds_stopped)
+// and word `word` of the wave state (y), loaded together once for the workgroup (every invocation
+// calls it, once): one round trip to memory, where the two calls of state_word took two.
+fn stopped_and_state_word(lid: u32, word: u32) -> vec2<u32> {
+    if lid == 0u {
+        state_pair = vec2<u32>(atomicLoad(&wave_state[STOPPED]), atomicLoad(&wave_state[word]));
+    }
+    return workgroupUniformLoad(&state_pair);
+}
+
 // The end of wave `wave`: its candidates (which its first step read) and its treelets, counted
 // no more.
 fn end_wave(wave: u32) {
