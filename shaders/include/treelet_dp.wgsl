@@ -60,9 +60,10 @@ var<private> leaf_area: array<f32, MAX_TREELET>;
 var<private> internal_node: array<u32, MAX_TREELET>;
 // The treelet's leaves (treelet_size, or fewer where the formation's depth bound stopped it).
 var<private> treelet_leaves: u32;
-// The root's children and primitive count before restructuring.
-var<private> root_children: vec2<u32>;
+// The root's primitive count, and the next round's levels of its children before restructuring
+// (0 for a child of fewer than next_gamma primitives), for store_root_next_level.
 var<private> root_prims: u32;
+var<private> root_child_levels: vec2<u32>;
 
 fn subset_cost(s: u32) -> f32 {
     return dp_cost[s - 1u];
@@ -174,13 +175,20 @@ fn leaf_depth(depths: u32, i: u32) -> u32 {
 // root's, so that every load of a leaf's node stays in bounds).
 fn form_treelet(root: u32) -> f32 {
     let r = nodes[root];
-    root_children = vec2<u32>(r.left_or_first, r.right_or_count);
     root_prims = prim_counts[root];
     // Phased rounds (params.phases = P): leaves at most P - 1 levels below the root, a bound a
     // treelet of at most P leaves never reaches.
     let max_depth = select(MAX_TREELET, params.phases - 1u, params.phases != 0u);
     take_leaf(0u, r.left_or_first, 1u < max_depth);
     take_leaf(1u, r.right_or_count, 1u < max_depth);
+    // Loaded with the first leaves, so that a treelet that keeps its topology stores its root's
+    // next level without a round trip to memory after the DP.
+    if params.next_gamma != NO_NEXT_ROUND {
+        root_child_levels = vec2<u32>(
+            select(0u, next_levels[r.left_or_first], leaf_prims[0] >= params.next_gamma),
+            select(0u, next_levels[r.right_or_count], leaf_prims[1] >= params.next_gamma),
+        );
+    }
     let current = combine_cost(surface_area(r.min, r.max, params.zero), root_prims, leaf_cost[0] + leaf_cost[1]);
     costs[root] = current;
     internal_node[0] = root;
@@ -243,18 +251,32 @@ fn child_code(part: u32, queued: u32) -> u32 {
     return select(MAX_TREELET + queued, firstTrailingBit(part), countOneBits(part) == 1u);
 }
 
+// Step 5's input: the next round's level of each treelet leaf of at least next_gamma primitives
+// (0 for the others), all loaded at once. The write-back loads them before its searches and
+// stores, so that their round trip to memory overlaps those instead of following them (the
+// write-back writes no level of a leaf). Zeros without a next round.
+fn leaf_next_levels() -> array<u32, MAX_TREELET> {
+    var levels: array<u32, MAX_TREELET>;
+    if params.next_gamma != NO_NEXT_ROUND {
+        for (var i = 0u; i < MAX_TREELET; i++) {
+            let is_root = i < TREELET_SIZE && leaf_prims[i] >= params.next_gamma;
+            levels[i] = select(0u, next_levels[leaf_node[min(i, TREELET_SIZE - 1u)]], is_root);
+        }
+    }
+    return levels;
+}
+
 // Step 5 after a write-back: the next round's level of each node written, children first, from
-// the treelet leaves' levels (all loaded at once: no load waits for another) and the entries'
-// own; no node data is read back. Nothing without a next round (its levels would all be 0, and
-// nothing reads them: the last round, the overlapped and the phased rounds).
-fn store_next_levels(queue: ptr<function, WriteQueue>) {
+// the treelet leaves' levels (`leaf_levels`, leaf_next_levels) and the entries' own; no node data
+// is read back. Nothing without a next round (its levels would all be 0, and nothing reads them:
+// the last round, the overlapped and the phased rounds).
+fn store_next_levels(queue: ptr<function, WriteQueue>, leaf_levels: array<u32, MAX_TREELET>) {
     if params.next_gamma == NO_NEXT_ROUND {
         return;
     }
     var level_of: array<u32, 2u * MAX_TREELET>;
     for (var i = 0u; i < MAX_TREELET; i++) {
-        let is_root = i < TREELET_SIZE && leaf_prims[i] >= params.next_gamma;
-        level_of[i] = select(0u, next_levels[leaf_node[min(i, TREELET_SIZE - 1u)]], is_root);
+        level_of[i] = leaf_levels[i];
     }
     for (var e = queued; e > 0u; e--) {
         let entry = e - 1u;
@@ -276,11 +298,7 @@ fn store_root_next_level(root: u32) {
     }
     var level = 0u;
     if root_prims >= params.next_gamma {
-        let l = root_children.x;
-        let r = root_children.y;
-        let left = select(0u, next_levels[l], prim_counts[l] >= params.next_gamma);
-        let right = select(0u, next_levels[r], prim_counts[r] >= params.next_gamma);
-        level = 1u + max(left, right);
+        level = 1u + max(root_child_levels.x, root_child_levels.y);
     }
     next_levels[root] = level;
 }
@@ -322,6 +340,7 @@ fn write_entry(queue: ptr<function, WriteQueue>, head: u32, split: u32, cost: f3
 // Steps 4 and 5: the new topology of the treelet below `root` from the DP's costs (`full_split`:
 // the full set's best partition, `full_cost`: its cost).
 fn write_back(full_split: u32, full_cost: f32) {
+    let leaf_levels = leaf_next_levels();
     var queue: WriteQueue;
     begin_write_back(&queue);
     for (var head = 0u; head < queued; head++) {
@@ -335,7 +354,7 @@ fn write_back(full_split: u32, full_cost: f32) {
         let b = subset_box(s);
         write_entry(&queue, head, split, cost, b.min, b.max, b.prims);
     }
-    store_next_levels(&queue);
+    store_next_levels(&queue, leaf_levels);
 }
 
 // Steps 1-5 for the treelet rooted at `root`. A treelet of fewer leaves than treelet_size takes

@@ -83,6 +83,7 @@ fn team_form(root: u32, team: u32) -> f32 {
 fn team_write_back(team: u32, full_split: u32, full_cost: f32) {
     let subsets = team * TEAM_SUBSETS;
     let halves = team * 16u;
+    let leaf_levels = leaf_next_levels();
     var queue: WriteQueue;
     begin_write_back(&queue);
     for (var head = 0u; head < queued; head++) {
@@ -95,7 +96,7 @@ fn team_write_back(team: u32, full_split: u32, full_cost: f32) {
         }
         write_entry(&queue, head, split, cost, team_subset_min(halves, s), team_subset_max(halves, s), team_subset_prims(halves, s));
     }
-    store_next_levels(&queue);
+    store_next_levels(&queue, leaf_levels);
 }
 
 // Steps 1-5 for the treelet rooted at `root`, by the invocation in lane `lane` of team `team`.
