@@ -10,7 +10,7 @@
 @group(0) @binding(1) var<storage, read> nodes: array<BvhNode>;
 @group(0) @binding(2) var<storage, read> parents: array<u32>;
 @group(0) @binding(3) var<storage, read> prim_counts: array<u32>;
-@group(0) @binding(4) var<storage, read> done: array<u32>;
+@group(0) @binding(4) var<storage, read_write> done: array<atomic<u32>>;
 @group(0) @binding(5) var<storage, read_write> candidate_waves: array<atomic<u32>>;
 @group(0) @binding(6) var<storage, read_write> lists: array<u32>;
 @group(0) @binding(7) var<storage, read_write> wave_state: array<atomic<u32>>;

@@ -13,7 +13,7 @@
 @group(0) @binding(3) var<storage, read_write> prim_counts: array<u32>;
 @group(0) @binding(4) var<storage, read_write> costs: array<f32>;
 @group(0) @binding(5) var<storage, read_write> next_levels: array<u32>;
-@group(0) @binding(6) var<storage, read_write> done: array<u32>;
+@group(0) @binding(6) var<storage, read_write> done: array<atomic<u32>>;
 @group(0) @binding(7) var<storage, read_write> candidate_waves: array<atomic<u32>>;
 @group(0) @binding(8) var<storage, read_write> lists: array<u32>;
 @group(0) @binding(9) var<storage, read_write> wave_state: array<atomic<u32>>;

@@ -13,8 +13,9 @@
 // make true, which adds it again), and a wave's treelets are disjoint subtrees, so the waves
 // optimize what the CPU twin's do. Entries are `node | round << ROUND_SHIFT`.
 // The including kernel declares `params: RoundParams` (treelet_round.wgsl), `nodes`, `parents`,
-// `prim_counts`, `done: array<u32>` (the wave in which each node was done in each round, 0: not
-// yet; node-major), `candidate_waves: array<atomic<u32>>` (the last wave each node and round was
+// `prim_counts`, `done: array<atomic<u32>>` (per node and round, node-major: 0 while not done,
+// else the complement of the wave that did it; `mark_done`), `candidate_waves:
+// array<atomic<u32>>` (the last wave each node and round was
 // made a candidate of), `lists: array<u32>` (the candidates of odd and even waves, `params.rounds *
 // params.count` entries each, then the wave's treelets) and `wave_state: array<atomic<u32>>`.
 
@@ -107,18 +108,24 @@ fn ops_base() -> u32 {
     return 2u * params.rounds * params.count;
 }
 
+// The done word of `node` in `round`: 0 while not done, else the complement of the wave that did
+// it (`mark_done`).
 fn done_in(node: u32, round: u32) -> u32 {
-    return done[node * params.rounds + round];
+    return atomicLoad(&done[node * params.rounds + round]);
 }
 
-// Whether `node` was done in `round` before wave `wave`.
-fn done_before(node: u32, round: u32, wave: u32) -> bool {
-    let d = done_in(node, round);
-    return d != 0u && d < wave;
+// Whether a node whose done word (of some round) is `d` was done in that round before wave
+// `wave`.
+fn done_before(d: u32, wave: u32) -> bool {
+    return d != 0u && ~d < wave;
 }
 
-fn is_leaf(node: u32) -> bool {
-    return (nodes[node].right_or_count & LEAF_FLAG) != 0u;
+// Marks `node` done in `round` by wave `wave` unless a wave before did (done words only grow
+// earlier: every mark is of the current wave, and a node is marked once per wave). One atomicMax
+// of the wave's complement keeps the earliest wave and waits for nothing; a load of the word and
+// a store where it was 0 waited for a round trip to memory per node and round.
+fn mark_done(node: u32, round: u32, wave: u32) {
+    atomicMax(&done[node * params.rounds + round], ~wave);
 }
 
 // Makes (node, round) a candidate of wave `wave`, once.
@@ -129,39 +136,67 @@ fn add_candidate(node: u32, round: u32, wave: u32) {
     }
 }
 
+// Whether child `c` (its right word, count and done word of `round`) keeps its parent from being
+// a candidate of `round` in wave `wave`: an internal node of at least `gamma` primitives not done
+// in `round` before the wave.
+fn child_blocks(right: u32, count: u32, done_word: u32, gamma: u32, wave: u32) -> bool {
+    return (right & LEAF_FLAG) == 0u && count >= gamma && !done_before(done_word, wave);
+}
+
 // A candidate of wave `wave`: READY (optimized in this wave), WAITING (only an ancestor within
-// the reach is not done in the round before: a candidate of the next wave) or DROP.
+// the reach is not done in the round before: a candidate of the next wave) or DROP. What a step
+// tests about a node is loaded at once: the node, its count, its done words and its parent link,
+// then both children's words, then per step up an ancestor's done word with its parent link. A
+// chain of conditions (`||`, a loop with early returns, a parent link and then its done word)
+// waited for one round trip to memory after another.
 fn candidate_state(node: u32, round: u32, wave: u32) -> u32 {
     let gamma = gamma_of(round);
-    if done_in(node, round) != 0u || is_leaf(node) || prim_counts[node] < gamma {
-        return DROP;
-    }
-    if round > 0u && !done_before(node, round - 1u, wave) {
-        return DROP;
-    }
+    // Round r − 1 (round 0's own word for r = 0, unused).
+    let previous = max(round, 1u) - 1u;
     let n = nodes[node];
-    let children = array<u32, 2>(n.left_or_first, n.right_or_count);
-    for (var k = 0u; k < 2u; k++) {
-        let c = children[k];
-        if !is_leaf(c) && prim_counts[c] >= gamma && !done_before(c, round, wave) {
-            return DROP;
-        }
+    let count = prim_counts[node];
+    let done_now = done_in(node, round);
+    let done_previous = done_in(node, previous);
+    var parent = parents[node];
+    if done_now != 0u || (n.right_or_count & LEAF_FLAG) != 0u || count < gamma {
+        return DROP;
+    }
+    if round > 0u && !done_before(done_previous, wave) {
+        return DROP;
+    }
+    let left = n.left_or_first;
+    let right = n.right_or_count;
+    let left_right = nodes[left].right_or_count;
+    let right_right = nodes[right].right_or_count;
+    let left_count = prim_counts[left];
+    let right_count = prim_counts[right];
+    let left_done = done_in(left, round);
+    let right_done = done_in(right, round);
+    let left_blocks = child_blocks(left_right, left_count, left_done, gamma, wave);
+    let right_blocks = child_blocks(right_right, right_count, right_done, gamma, wave);
+    if left_blocks || right_blocks {
+        return DROP;
     }
     if round == 0u {
         return READY;
     }
+    // x with its done word of round r − 1 and its parent link (past the root: the root's own
+    // word, in bounds and unused).
     var x = node;
+    var done_x = done_previous;
     var up = 0u;
     var state = READY;
     loop {
-        if !done_before(x, round - 1u, wave) {
+        if !done_before(done_x, wave) {
             state = WAITING;
             break;
         }
         if x == 0u || up >= params.reach {
             break;
         }
-        x = parents[x];
+        x = parent;
+        done_x = done_in(x, previous);
+        parent = parents[x];
         up++;
     }
     return state;

@@ -18,7 +18,7 @@ use crate::gpu::{
 use crate::Result;
 
 kernel!(pub WAVES_FIND: RoundParams = "waves_find"::"main", [32, 1, 1],
-    [Read, Read, Read, Read, ReadWrite, ReadWrite, ReadWrite, ReadWrite]);
+    [Read, Read, Read, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite]);
 kernel!(pub WAVES_OPTIMIZE: RoundParams = "waves_optimize"::"main", [32, 1, 1],
     [ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite,
      ReadWrite, Read]);
