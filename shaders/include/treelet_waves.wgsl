@@ -136,9 +136,9 @@ fn add_candidate(node: u32, round: u32, wave: u32) {
     }
 }
 
-// Whether child `c` (its right word, count and done word of `round`) keeps its parent from being
-// a candidate of `round` in wave `wave`: an internal node of at least `gamma` primitives not done
-// in `round` before the wave.
+// Whether a child (its right word, count and done word of the candidate's round) keeps its
+// parent from being a candidate of that round in wave `wave`: an internal node of at least
+// `gamma` primitives not done in the round before the wave.
 fn child_blocks(right: u32, count: u32, done_word: u32, gamma: u32, wave: u32) -> bool {
     return (right & LEAF_FLAG) == 0u && count >= gamma && !done_before(done_word, wave);
 }
