@@ -31,8 +31,8 @@ build)
   git diff --quiet -- $dp $team || { echo "uncommitted changes in $dp or $team: commit or stash them first"; exit 1; }
   mkdir -p .gpu
   trap 'git checkout -- $dp $team' EXIT
-  nowrite='s/    if full_cost < current {/    if full_cost < current \&\& params.zero != 0u {/'
-  nodp='s/    let best = subset_costs();/    var best = vec2<u32>(1u, 0u); if params.zero != 0u { best = subset_costs(); }/'
+  nowrite='s/    if treelet_leaves > 2u \&\& full_cost < current {/    if treelet_leaves > 2u \&\& full_cost < current \&\& params.zero != 0u {/'
+  nodp='s/    var best = subset_costs();/    var best = vec2<u32>(1u, 0u); if params.zero != 0u { best = subset_costs(); }/'
   noform='s/    for (var count = 2u; count < TREELET_SIZE; count++) {/    for (var count = 2u; count < TREELET_SIZE \&\& params.zero != 0u; count++) {/'
   for variant in nowrite nodp noform; do
     case $variant in
