@@ -3,8 +3,10 @@
 // (the roots of disjoint subtrees) 64 at a time and emit their subtrees (wide_collapse.wgsl).
 // Each step every busy invocation emits one node (a wave: one device atomic per counter
 // allocates its children and references), until none is busy. An invocation walks its subtree
-// depth-first without a stack: a node with internal children keeps its parent in its
-// `wide_sources` word (its binary source is no longer needed), and siblings are consecutive. To
+// depth-first without a stack: a node with internal children keeps its parent and the end of its
+// siblings in its `wide_sources` entry (its binary source is no longer needed; one load gives a
+// step up both, where the parent's link and then the parent's node took two round trips to
+// memory), and siblings are consecutive. To
 // keep the invocations busy it gives a node's children but the last to a pool of subtree roots in
 // workgroup memory, which idle invocations take from (the walk then goes on with the children the
 // pool had no room for); a deep, lopsided tail costs about its nodes / 64 + its depth in steps per
@@ -84,7 +86,7 @@ fn main(
                         pool[at + k] = children.x + k;
                     }
                 }
-                wide_sources[node] = parent;
+                wide_sources[node] = vec2<u32>(parent, siblings_end);
                 parent = node;
                 node = children.x + given;
                 siblings_end = children.x + children.y;
@@ -101,9 +103,9 @@ fn main(
                     }
                     node = parent;
                     if node != root {
-                        parent = wide_sources[node];
-                        let above = wide_nodes[parent];
-                        siblings_end = above.child_base + countOneBits(internal_slots(above));
+                        let link = wide_sources[node];
+                        parent = link.x;
+                        siblings_end = link.y;
                     }
                 }
             }

@@ -1,7 +1,7 @@
 // Binary-to-wide conversion, one wide node per invocation (CPU twins: `WideBvh::from_binary` and
 // `WideBvh::from_binary_optimal`, src/bvh/wide/convert.rs; the kernels run it top-down:
 // wide_nodes_emit.wgsl level by level, then wide_nodes_finish.wgsl a subtree per invocation).
-// Wide node w is made from binary node `wide_sources[w]`:
+// Wide node w is made from binary node `wide_sources[w].x`:
 // 1. Children, by one of two collapses (`params.collapse`):
 //    - optimal: the split of 8 slots that costs_climb.wgsl chose for the binary node, each part
 //      expanded by its node's choices (collapse_choices.wgsl), left before right: Ylitie et al.'s
@@ -55,8 +55,9 @@ const COLLAPSE_OPTIMAL: u32 = 1u;
 // Per reference, its position in the binary tree's `prim_indices` (triangles_gather.wgsl replaces
 // it with the triangle's index).
 @group(0) @binding(3) var<storage, read_write> wide_prims: array<u32>;
-// Binary node of each wide node.
-@group(0) @binding(4) var<storage, read_write> wide_sources: array<u32>;
+// Binary node of each wide node (x; y unused here: wide_nodes_finish.wgsl keeps the link of its
+// walk there).
+@group(0) @binding(4) var<storage, read_write> wide_sources: array<vec2<u32>>;
 // [0] wide nodes allocated, [1] references written, [2] capacity overflows.
 @group(0) @binding(5) var<storage, read_write> wide_counters: array<atomic<u32>>;
 // Level records, 8 words per level: [workgroups x, y, z, first node, end node, 0, 0, 0]; even
@@ -334,7 +335,7 @@ fn commit_wide_node(w: u32, draft: WideDraft, prim_base: u32, child_base: u32) {
     var next_child = child_base;
     for (var s = 0u; s < 8u; s++) {
         if ((imask >> s) & 1u) != 0u {
-            wide_sources[next_child] = draft.slot_words[s];
+            wide_sources[next_child].x = draft.slot_words[s];
             next_child++;
         } else {
             let first = draft.slot_words[s];
@@ -354,7 +355,7 @@ var<workgroup> wave_children: atomic<u32>;
 var<workgroup> wave_prims: atomic<u32>;
 var<workgroup> wave_bases: vec2<u32>;
 
-// Emits wide node `w` if `emits` (from binary node `wide_sources[w]`, the root from node 0), in a
+// Emits wide node `w` if `emits` (from binary node `wide_sources[w].x`, the root from node 0), in a
 // wave with the workgroup's other invocations: the wave's children and references are allocated
 // with one device atomic per counter, not one per node. Returns w's internal children (first wide
 // node, count; count 0: none, or not emitted). Every invocation of the workgroup calls it
@@ -364,7 +365,7 @@ fn emit_wave_node(w: u32, emits: bool, lid: u32) -> vec2<u32> {
     var child_offset = 0u;
     var prim_offset = 0u;
     if emits {
-        draft = draft_wide_node(select(wide_sources[w], 0u, w == 0u));
+        draft = draft_wide_node(select(wide_sources[w].x, 0u, w == 0u));
         child_offset = atomicAdd(&wave_children, draft.internal);
         prim_offset = atomicAdd(&wave_prims, draft.prims);
     }

@@ -18,7 +18,8 @@ pub struct WideTree {
     /// The triangles of `prim_indices` in order, each with its index in its `_pad1` word: what
     /// the wide traversal tests (`bvh::wide::gather_triangles`, kernel `triangles_gather`).
     pub triangles: wgpu::Buffer,
-    /// The binary node each wide node was made from (conversion scratch).
+    /// Per wide node, the binary node it was made from and a word the finish's walk keeps its
+    /// siblings' end in (8 bytes; conversion scratch).
     pub sources: wgpu::Buffer,
     pub counters: wgpu::Buffer,
     pub records: [wgpu::Buffer; 2],
@@ -83,7 +84,7 @@ impl WideTree {
                 "wide triangles",
                 u64::from(prims) * std::mem::size_of::<Triangle>() as u64,
             )?,
-            sources: storage_buffer_zeroed(ctx, "wide sources", u64::from(nodes) * 4)?,
+            sources: storage_buffer_zeroed(ctx, "wide sources", u64::from(nodes) * 8)?,
             counters: storage_buffer_zeroed(ctx, "wide counters", 12)?,
             records: [
                 indirect_buffer_zeroed(ctx, "wide records (even levels)", record_bytes)?,
