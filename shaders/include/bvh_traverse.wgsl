@@ -8,13 +8,16 @@
 #include "ray_triangle.wgsl"
 #include "ray_box.wgsl"
 
-// Intersects the triangles of references first..end-1, keeping the closest hit in `best`.
-fn intersect_leaf(first: u32, end: u32, test: RayTriangleTest, t_min: f32, best: ptr<function, Hit>) {
+// Intersects the triangles of references first..end-1, keeping the closest hit in `best` and its
+// material in `best_material`.
+fn intersect_leaf(first: u32, end: u32, test: RayTriangleTest, t_min: f32, best: ptr<function, Hit>, best_material: ptr<function, u32>) {
     for (var i = first; i < end; i++) {
         let tri_index = prim_indices[i];
-        let h = intersect_triangle(test, load_triangle(tri_index), t_min, (*best).t);
+        let tri = load_triangle(tri_index);
+        let h = intersect_triangle(test, tri, t_min, (*best).t);
         if h.w != 0.0 {
             *best = Hit(h.x, tri_index, h.y, h.z);
+            *best_material = tri.material;
         }
     }
 }
@@ -26,12 +29,13 @@ alias TraversalStack = array<vec2<u32>, STACK_SIZE>;
 
 fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_zero: u32, any_hit: bool, stack: ptr<function, TraversalStack>) -> TraceResult {
     var best = Hit(t_max, MISS, 0.0, 0.0);
+    var best_material = 0u;
     let test = ray_triangle_test(origin, dir, opaque_zero);
     var overflow = 0u;
     let boxes = box_ray(origin, dir);
     let root = nodes[0];
     if box_entry(root.min, root.max, boxes, t_min, best.t) == NO_ENTRY {
-        return TraceResult(best, 0u);
+        return TraceResult(best, 0u, 0u);
     }
     var sp = 0u;
     var index = 0u;
@@ -40,9 +44,9 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_ze
         var descend = false;
         if (node.right_or_count & LEAF_FLAG) != 0u {
             let first = node.left_or_first;
-            intersect_leaf(first, first + (node.right_or_count & ~LEAF_FLAG), test, t_min, &best);
+            intersect_leaf(first, first + (node.right_or_count & ~LEAF_FLAG), test, t_min, &best, &best_material);
             if any_hit && best.tri != MISS {
-                return TraceResult(best, overflow);
+                return TraceResult(best, overflow, best_material);
             }
         } else {
             let left = nodes[node.left_or_first];
@@ -94,5 +98,5 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_ze
             }
         }
     }
-    return TraceResult(best, overflow);
+    return TraceResult(best, overflow, best_material);
 }

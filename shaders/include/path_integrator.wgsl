@@ -127,8 +127,9 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
                 path.radiance += path.throughput * sky_radiance(path.dir);
                 ended = true;
             } else {
+                // Both loads at once: the material came with the hit.
                 let tri = load_triangle(hit.tri);
-                let material = materials[tri.material];
+                let material = materials[traced.material];
                 path.radiance += path.throughput * material.emission;
                 path.throughput *= material.albedo;
                 var n = normalize(cross(tri.v1 - tri.v0, tri.v2 - tri.v0));

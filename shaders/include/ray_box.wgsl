@@ -43,5 +43,8 @@ struct TraceResult {
     hit: Hit,
     // 1 when the traversal stack overflowed (the result may have missed geometry).
     overflow: u32,
+    // The hit triangle's material (0 on a miss), kept from the triangle test's loads: a path
+    // tracer's load of the material then waits for no load of the triangle.
+    material: u32,
 }
 

@@ -32,9 +32,10 @@ fn load_wide_node(index: u32) -> WideNode {
 }
 
 // Intersects the triangles of references first..end-1 (their copies in `wide_triangles`, each
-// with its triangle's index after v1), keeping the closest hit in `best`. Bound as words, so the
+// with its triangle's index after v1), keeping the closest hit in `best` and its material in
+// `best_material`. Bound as words, so the
 // index and material (denormal bit patterns as floats) come through no float handling.
-fn intersect_wide_leaf(first: u32, end: u32, test: RayTriangleTest, t_min: f32, best: ptr<function, Hit>) {
+fn intersect_wide_leaf(first: u32, end: u32, test: RayTriangleTest, t_min: f32, best: ptr<function, Hit>, best_material: ptr<function, u32>) {
     for (var i = first; i < end; i++) {
         let w0 = wide_triangles[3u * i];
         let w1 = wide_triangles[3u * i + 1u];
@@ -43,6 +44,7 @@ fn intersect_wide_leaf(first: u32, end: u32, test: RayTriangleTest, t_min: f32, 
         let h = intersect_triangle(test, tri, t_min, (*best).t);
         if h.w != 0.0 {
             *best = Hit(h.x, tri.pad1, h.y, h.z);
+            *best_material = tri.material;
         }
     }
 }
@@ -145,6 +147,7 @@ alias TraversalStack = array<vec3<u32>, STACK_SIZE>;
 
 fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_zero: u32, any_hit: bool, stack: ptr<function, TraversalStack>) -> TraceResult {
     var best = Hit(t_max, MISS, 0.0, 0.0);
+    var best_material = 0u;
     let test = ray_triangle_test(origin, dir, opaque_zero);
     let boxes = box_ray(origin, dir);
     // Slots of children on the ray's negative side of an axis come first along it.
@@ -188,9 +191,9 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_ze
                 continue;
             }
             let first = leaf_first(node, slot);
-            intersect_wide_leaf(first, first + slot_byte(node.leaf_counts, slot), test, t_min, &best);
+            intersect_wide_leaf(first, first + slot_byte(node.leaf_counts, slot), test, t_min, &best, &best_material);
             if any_hit && best.tri != MISS {
-                return TraceResult(best, overflow);
+                return TraceResult(best, overflow, best_material);
             }
         }
         // The internal children hit. One: descend into it, its offset from child_base being the
@@ -249,5 +252,5 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_ze
             }
         }
     }
-    return TraceResult(best, overflow);
+    return TraceResult(best, overflow, best_material);
 }
