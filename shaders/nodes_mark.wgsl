@@ -172,14 +172,14 @@ fn gather_references(root: u32, first_leaf: u32) -> u32 {
     return count;
 }
 
-fn collapses(node: u32) -> bool {
-    let b = nodes[node];
+// Whether a node (`b`, of `n` primitives and SAH cost `cost`) becomes an output leaf's root
+// candidate: a working leaf, or a node whose primitives cost no more as one leaf.
+fn collapses(b: BvhNode, n: u32, cost: f32) -> bool {
     if (b.right_or_count & LEAF_FLAG) != 0u {
         return true;
     }
-    let n = prim_counts[node];
     let a = surface_area(b.min, b.max, params.zero);
-    return n <= params.max_leaf_size && params.ct * a * f32(n) <= costs[node];
+    return n <= params.max_leaf_size && params.ct * a * f32(n) <= cost;
 }
 
 @compute @workgroup_size(64)
@@ -196,26 +196,36 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     var kept = true;
-    let slotted = params.has_refs == 0u && (nodes[i].right_or_count & LEAF_FLAG) != 0u;
+    let node = nodes[i];
+    let count = prim_counts[i];
+    let cost = costs[i];
+    let slotted = params.has_refs == 0u && (node.right_or_count & LEAF_FLAG) != 0u;
     // The output leaf holding a working leaf's primitives and their position in its range.
     var owner = i;
     var position = 0u;
     var before = 0u;
     // A node of more than max_leaf_size primitives is kept: so are its ancestors, which have more.
-    var x = select(i, 0u, prim_counts[i] > params.max_leaf_size);
+    // Each step up loads what it tests of the ancestor at once (node, count, cost and its own
+    // link up, for the next step), and a right child's left sibling has the ancestor's primitives
+    // but the child's: one round trip to memory per step, where the link, then the count, then
+    // the node and the left sibling's count took up to four.
+    var x = select(i, 0u, count > params.max_leaf_size);
+    var child_count = count;
+    var up = parents[i];
     while x != 0u {
         let child = x;
-        x = parents[x];
-        if prim_counts[x] > params.max_leaf_size {
+        x = up;
+        let above = nodes[x];
+        let above_count = prim_counts[x];
+        let above_cost = costs[x];
+        up = parents[x];
+        if above_count > params.max_leaf_size {
             break;
         }
-        if slotted {
-            let left = nodes[x].left_or_first;
-            if left != child {
-                before += prim_counts[left];
-            }
+        if slotted && above.left_or_first != child {
+            before += above_count - child_count;
         }
-        if collapses(x) {
+        if collapses(above, above_count, above_cost) {
             kept = false;
             owner = x;
             position = before;
@@ -223,11 +233,12 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
                 break;
             }
         }
+        child_count = above_count;
     }
     if slotted {
-        leaf_slots[nodes[i].left_or_first] = vec2<u32>(owner, position);
+        leaf_slots[node.left_or_first] = vec2<u32>(owner, position);
     }
-    let leaf = kept && collapses(i);
+    let leaf = kept && collapses(node, count, cost);
     flags[i] = select(0u, 1u, kept) | select(0u, 2u, leaf);
     scans[i] = select(0u, 1u, kept);
     var prims = 0u;
@@ -235,13 +246,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         // Not a select: WGSL evaluates both of its arguments, and the gather walks the subtree.
         if params.has_refs != 0u {
             let n = min(params.leaf_count, count_limit[0]);
-            if prim_counts[i] <= FRONTIER {
+            if count <= FRONTIER {
                 prims = gather_frontier(i, n);
             } else {
                 prims = gather_references(i, n - 1u);
             }
         } else {
-            prims = prim_counts[i];
+            prims = count;
         }
     }
     scans[column_len + i] = prims;
