@@ -236,8 +236,7 @@ fn optimize_treelet_team(root: u32, has_treelet: bool, team: u32, lane: u32) {
             full_split = team_split[subsets + full];
             full_cost = team_cost[subsets + full];
         } else {
-            let full_area = surface_area(team_subset_min(halves, full), team_subset_max(halves, full), params.zero);
-            full_cost = combine_cost(full_area, team_subset_prims(halves, full), full_best);
+            full_cost = internal_cost(team_subset_min(halves, full), team_subset_max(halves, full), team_subset_prims(halves, full), full_best);
         }
         if treelet_leaves > 2u && full_cost < current {
             team_write_back(team, full_split, full_cost);

@@ -46,13 +46,12 @@ fn finish_entry(entry: u32, wave: u32) {
     var claims: array<u32, MAX_TREELET + 1u>;
     var wanted = 0u;
     for (var k = 0u; k <= MAX_TREELET; k++) {
-        var candidate = vec2<u32>(parent, round);
+        let candidate = finished_candidate(k, parent, round);
         var wants = node != 0u && parent_count >= gamma_of(round);
         if k < MAX_TREELET {
-            candidate = vec2<u32>(internal_node[k], next);
             wants = (k == 0u || k < queued) && next < rounds && counts[k] >= gamma_of(next);
         }
-        let slot = candidate.x * rounds + min(candidate.y, rounds - 1u);
+        let slot = round_slot(candidate.x, min(candidate.y, rounds - 1u));
         claims[k] = atomicMax(&candidate_waves[slot], select(0u, next_wave, wants));
         wanted |= select(0u, 1u << k, wants);
     }
@@ -63,12 +62,19 @@ fn finish_entry(entry: u32, wave: u32) {
     if won == 0u {
         return;
     }
-    var at = candidates_base(next_wave) + atomicAdd(&wave_state[CANDIDATE_COUNT + (next_wave & 1u)], countOneBits(won));
+    var at = reserve_candidates(next_wave, countOneBits(won));
     for (var k = 0u; k <= MAX_TREELET; k++) {
         if ((won >> k) & 1u) != 0u {
-            let candidate = select(vec2<u32>(parent, round), vec2<u32>(internal_node[min(k, MAX_TREELET - 1u)], next), k < MAX_TREELET);
-            lists[at] = candidate.x | (candidate.y << ROUND_SHIFT);
+            let candidate = finished_candidate(k, parent, round);
+            lists[at] = wave_entry(candidate.x, candidate.y);
             at++;
         }
     }
+}
+
+// Candidate k of a treelet of round `round` whose root's parent is `parent` (`finish_entry`):
+// (node, round), internal_node[k] in the next round for k < MAX_TREELET, else the parent in
+// `round`.
+fn finished_candidate(k: u32, parent: u32, round: u32) -> vec2<u32> {
+    return select(vec2<u32>(parent, round), vec2<u32>(internal_node[min(k, MAX_TREELET - 1u)], round + 1u), k < MAX_TREELET);
 }

@@ -108,10 +108,16 @@ fn ops_base() -> u32 {
     return 2u * params.rounds * params.count;
 }
 
+// Where (node, round) is in the node-major arrays of a word per node and round (`done`,
+// `candidate_waves`).
+fn round_slot(node: u32, round: u32) -> u32 {
+    return node * params.rounds + round;
+}
+
 // The done word of `node` in `round`: 0 while not done, else the complement of the wave that did
 // it (`mark_done`).
 fn done_in(node: u32, round: u32) -> u32 {
-    return atomicLoad(&done[node * params.rounds + round]);
+    return atomicLoad(&done[round_slot(node, round)]);
 }
 
 // Whether a node whose done word (of some round) is `d` was done in that round before wave
@@ -125,14 +131,23 @@ fn done_before(d: u32, wave: u32) -> bool {
 // of the wave's complement keeps the earliest wave and waits for nothing; a load of the word and
 // a store where it was 0 waited for a round trip to memory per node and round.
 fn mark_done(node: u32, round: u32, wave: u32) {
-    atomicMax(&done[node * params.rounds + round], ~wave);
+    atomicMax(&done[round_slot(node, round)], ~wave);
 }
 
-// Makes (node, round) a candidate of wave `wave`, once.
+// The entry of (node, round) in the lists.
+fn wave_entry(node: u32, round: u32) -> u32 {
+    return node | (round << ROUND_SHIFT);
+}
+
+// The first of `n` consecutive places reserved in wave `wave`'s candidate list.
+fn reserve_candidates(wave: u32, n: u32) -> u32 {
+    return candidates_base(wave) + atomicAdd(&wave_state[CANDIDATE_COUNT + (wave & 1u)], n);
+}
+
+// Makes (node, round) a candidate of wave `wave`, once (its claim on `candidate_waves`).
 fn add_candidate(node: u32, round: u32, wave: u32) {
-    if atomicMax(&candidate_waves[node * params.rounds + round], wave) < wave {
-        let slot = atomicAdd(&wave_state[CANDIDATE_COUNT + (wave & 1u)], 1u);
-        lists[candidates_base(wave) + slot] = node | (round << ROUND_SHIFT);
+    if atomicMax(&candidate_waves[round_slot(node, round)], wave) < wave {
+        lists[reserve_candidates(wave, 1u)] = wave_entry(node, round);
     }
 }
 
