@@ -35,7 +35,7 @@ fn main(
         level_size = schedule[params.level - 1u];
     }
     let size = workgroupUniformLoad(&level_size);
-    if size < params.team_below {
+    if by_teams(size) {
         let has_treelet = group < size;
         optimize_treelet_team(select(0u, roots[first + min(group, size - 1u)], has_treelet), has_treelet, 0u, lid);
     } else if i < size {

@@ -36,7 +36,7 @@ fn main(
         return;
     }
     let treelets = state.y;
-    if treelets < params.team_below {
+    if by_teams(treelets) {
         let has_treelet = group < treelets;
         let entry = lists[ops_base() + min(group, max(treelets, 1u) - 1u)];
         queued = 0u;

@@ -42,13 +42,24 @@ var<workgroup> team_split: array<u32, TEAMS * TEAM_SUBSETS>;
 var<workgroup> team_best_cost: array<f32, TEAMS * TEAM_LANES>;
 var<workgroup> team_best_split: array<u32, TEAMS * TEAM_LANES>;
 
+// 1: this pipeline holds the team path; 0: it does not, and its threshold (params.team_below) is
+// 0, so that the path would never run (`TreeletKernels::get`). The schedules' defaults give teams
+// no threshold, and a GPU compiler then drops the path's code and workgroup memory instead of
+// allocating registers and instruction cache for it.
+override TREELET_TEAMS: u32 = 1u;
+
+// Whether a dispatched level's or wave's `treelets` go to teams, one per workgroup.
+fn by_teams(treelets: u32) -> bool {
+    return TREELET_TEAMS != 0u && treelets < params.team_below;
+}
+
 // A climb's wave (treelets_climb.wgsl, waves_climb.wgsl: TEAMS teams, a treelet per team at a
 // time) goes to the teams below this many treelets and below the team threshold: from TEAM_WAVE
 // treelets on, it takes longer by teams than with a treelet per invocation.
 const TEAM_WAVE: u32 = 32u;
 
 fn climb_wave_by_teams(treelets: u32) -> bool {
-    return treelets < min(params.team_below, TEAM_WAVE);
+    return by_teams(treelets) && treelets < TEAM_WAVE;
 }
 
 fn team_subset_min(base: u32, s: u32) -> vec3<f32> {

@@ -429,35 +429,70 @@ const DEFAULT_SUBTREE_WIDTH: u32 = 128;
 /// Treelet sizes with kernels of their own, MIN_TREELET_SIZE..=MAX_TREELET_SIZE.
 const TREELET_SIZES: usize = (MAX_TREELET_SIZE - MIN_TREELET_SIZE + 1) as usize;
 
-/// Treelet kernels compiled when first used, one per treelet size from MIN_TREELET_SIZE and DP
-/// form (`dp as usize`): the WGSL overrides `TREELET_SIZE` and `TREELET_DP_LOOP` select the
-/// generated DP (`dp_unrolled`).
+/// The pipeline-overridable constant that gives a treelet kernel its team path (`override
+/// TREELET_TEAMS` in treelet_team.wgsl): 1 where its dispatches give teams a threshold, else 0,
+/// and a GPU compiler drops the path, which the default schedules never run (RADV:
+/// `treelets_optimize` 49,156 → 37,708 bytes of code, 3.5 KiB → 0.5 KiB of workgroup memory, no
+/// scalar register spilled instead of 30; README, "Kernel statistics").
+pub const TREELET_TEAMS_OVERRIDE: &str = "TREELET_TEAMS";
+
+/// Treelet kernels compiled when first used, one per treelet size from MIN_TREELET_SIZE, DP form
+/// (`dp as usize`) and, for a kernel with a team path, whether it has it: the WGSL overrides
+/// `TREELET_SIZE` and `TREELET_DP_LOOP` select the generated DP (`dp_unrolled`),
+/// `TREELET_TEAMS` the team path.
 pub(crate) struct TreeletKernels {
     decl: &'static KernelDecl<RoundParams>,
-    compiled: [[OnceLock<Kernel<RoundParams>>; TreeletDp::FORMS]; TREELET_SIZES],
+    /// Whether the kernel includes treelet_team.wgsl (and so declares `TREELET_TEAMS`).
+    has_teams: bool,
+    compiled: [[[OnceLock<Kernel<RoundParams>>; 2]; TreeletDp::FORMS]; TREELET_SIZES],
 }
+
+/// The line by which a treelet kernel takes the team path (and its override).
+const TEAM_INCLUDE: &str = "#include \"treelet_team.wgsl\"";
 
 impl TreeletKernels {
     pub(crate) fn new(decl: &'static KernelDecl<RoundParams>) -> Self {
         Self {
             decl,
+            has_teams: decl.info.source.contains(TEAM_INCLUDE),
             compiled: Default::default(),
         }
     }
 
+    /// The kernel for treelets of `treelet_size` leaves and this DP form, dispatched with the
+    /// team threshold `team_below` (`RoundParams::team_below`): with the team path only where
+    /// the threshold can send a treelet to it.
     pub(crate) fn get(
         &self,
         ctx: &GpuContext,
         treelet_size: u32,
         dp: TreeletDp,
+        team_below: u32,
     ) -> &Kernel<RoundParams> {
-        self.compiled[(treelet_size - MIN_TREELET_SIZE) as usize][dp as usize].get_or_init(|| {
-            let overrides = &[
-                (TREELET_SIZE_OVERRIDE, f64::from(treelet_size)),
-                (TREELET_DP_LOOP_OVERRIDE, dp.override_value()),
-            ];
-            Kernel::with_overrides(ctx, self.decl, overrides)
+        let teams = self.has_teams && team_below > 0;
+        let slot = &self.compiled[(treelet_size - MIN_TREELET_SIZE) as usize][dp as usize];
+        slot[usize::from(teams)].get_or_init(|| {
+            let overrides = self.overrides(treelet_size, dp, team_below);
+            Kernel::with_overrides(ctx, self.decl, &overrides)
         })
+    }
+
+    /// The override values of the kernel `get` gives for these arguments (`TREELET_TEAMS` only
+    /// where the kernel declares it).
+    fn overrides(
+        &self,
+        treelet_size: u32,
+        dp: TreeletDp,
+        team_below: u32,
+    ) -> Vec<(&'static str, f64)> {
+        let mut overrides = vec![
+            (TREELET_SIZE_OVERRIDE, f64::from(treelet_size)),
+            (TREELET_DP_LOOP_OVERRIDE, dp.override_value()),
+        ];
+        if self.has_teams {
+            overrides.push((TREELET_TEAMS_OVERRIDE, f64::from(u8::from(team_below > 0))));
+        }
+        overrides
     }
 }
 
@@ -569,7 +604,7 @@ impl TreeletRounds {
                 // arguments count them all); the treelet buffers but the teams' subsets.
                 let subtrees = self
                     .subtrees
-                    .get(ctx, round.treelet_size, self.schedule.dp());
+                    .get(ctx, round.treelet_size, self.schedule.dp(), 0);
                 let subtree_buffers = [&treelet_buffers[..6], &[state.next_levels]].concat();
                 pass.dispatch_indirect(subtrees, state.schedule, args, &params, &subtree_buffers);
             }
@@ -578,9 +613,12 @@ impl TreeletRounds {
         let params = params.for_climb(dispatched + 1, first_slot(dispatched + 1), &self.schedule);
         let mut climb_buffers = treelet_buffers.to_vec();
         climb_buffers.extend([state.levels, state.arrivals, state.waves]);
-        let climb = self
-            .climb
-            .get(ctx, round.treelet_size, self.schedule.climb_dp());
+        let climb = self.climb.get(
+            ctx,
+            round.treelet_size,
+            self.schedule.climb_dp(),
+            params.team_below,
+        );
         rec.pass("treelets climb")
             .dispatch(climb, Grid::workgroups(1, 1), &params, &climb_buffers);
     }
@@ -600,10 +638,12 @@ impl TreeletRounds {
         ]
     }
 
-    /// `treelets_optimize` for treelets of `treelet_size` leaves, with the DP form of the
-    /// dispatched levels.
+    /// `treelets_optimize` for treelets of `treelet_size` leaves, with the DP form and the team
+    /// threshold of the dispatched levels (and phases).
     pub(crate) fn optimize(&self, ctx: &GpuContext, treelet_size: u32) -> &Kernel<RoundParams> {
-        self.optimize.get(ctx, treelet_size, self.schedule.dp())
+        let team_below = self.schedule.team_below();
+        self.optimize
+            .get(ctx, treelet_size, self.schedule.dp(), team_below)
     }
 
     /// `subsets_by_size`, which the teams read.
@@ -812,5 +852,46 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A kernel with a team path gets it only where its threshold can send a treelet there, and
+    /// the override is declared where the team path is included (the kernels without one are
+    /// compiled without the override, which wgpu would refuse as unknown).
+    #[test]
+    fn team_path_only_with_a_threshold() {
+        use super::{TreeletKernels, TREELET_TEAMS_OVERRIDE};
+        use crate::bvh::treelet::{
+            SUBTREES_OPTIMIZE, TREELETS_CLIMB, TREELETS_OPTIMIZE, WAVES_CLIMB, WAVES_OPTIMIZE,
+        };
+        use crate::gpu::shader_source;
+        let teams = |kernels: &TreeletKernels, team_below: u32| {
+            kernels
+                .overrides(7, TreeletDp::Unrolled, team_below)
+                .iter()
+                .find(|(name, _)| *name == TREELET_TEAMS_OVERRIDE)
+                .map(|&(_, value)| value)
+        };
+        for decl in [
+            &TREELETS_OPTIMIZE,
+            &TREELETS_CLIMB,
+            &WAVES_OPTIMIZE,
+            &WAVES_CLIMB,
+        ] {
+            let kernels = TreeletKernels::new(decl);
+            assert_eq!(teams(&kernels, 0), Some(0.0), "{}", decl.info.name);
+            assert_eq!(teams(&kernels, 1), Some(1.0), "{}", decl.info.name);
+            assert_eq!(teams(&kernels, u32::MAX), Some(1.0), "{}", decl.info.name);
+            let source = shader_source(decl.info.source, &[]);
+            assert!(
+                source.contains("override TREELET_TEAMS"),
+                "{}",
+                decl.info.name
+            );
+        }
+        let subtrees = TreeletKernels::new(&SUBTREES_OPTIMIZE);
+        assert_eq!(teams(&subtrees, 256), None);
+        assert!(
+            !shader_source(SUBTREES_OPTIMIZE.info.source, &[]).contains("override TREELET_TEAMS")
+        );
     }
 }

@@ -187,7 +187,9 @@ impl OverlappedRounds {
         let mut climb_buffers = climb_buffers.to_vec();
         climb_buffers.push(subsets);
         let find = self.find.get_or_init(|| Kernel::new(ctx, &WAVES_FIND));
-        let optimize = self.optimize.get(ctx, overlap.treelet_size, overlap.dp);
+        let optimize = self
+            .optimize
+            .get(ctx, overlap.treelet_size, overlap.dp, overlap.team_below);
         let mut pass = rec.pass("treelets");
         for wave in 1..=overlap.dispatched {
             let params = params(wave);
@@ -195,7 +197,12 @@ impl OverlappedRounds {
             pass.dispatch_indirect(optimize, &b.optimize_args, 0, &params, &optimize_buffers);
         }
         drop(pass);
-        let climb = self.climb.get(ctx, overlap.treelet_size, overlap.climb_dp);
+        let climb = self.climb.get(
+            ctx,
+            overlap.treelet_size,
+            overlap.climb_dp,
+            overlap.climb_team_below,
+        );
         rec.pass("treelets climb").dispatch(
             climb,
             Grid::workgroups(1, 1),
