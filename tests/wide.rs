@@ -94,9 +94,7 @@ fn build_wide(
     updater.set_layout(gpu(), Layout::Wide);
     let converter = updater.converter_mut().unwrap();
     converter.set_level_dispatches(spread.level_dispatches);
-    converter
-        .set_finish_pool(gpu(), spread.finish_pool)
-        .unwrap();
+    converter.set_finish_pool(spread.finish_pool).unwrap();
     converter.set_collapse(collapse);
     record_update(&mut updater, &geometry, &scene.triangles, &mut tree).unwrap();
     (geometry, tree)
@@ -212,7 +210,7 @@ fn every_level_schedule_gives_the_same_tree() {
     }
     let mut converter = WideConverter::new(gpu(), &SahParams::default());
     for roots in [0, FINISH_POOL + 1] {
-        let refused = converter.set_finish_pool(gpu(), Some(roots));
+        let refused = converter.set_finish_pool(Some(roots));
         assert!(
             matches!(refused, Err(Error::InvalidArgument(_))),
             "{roots} roots: {refused:?}"

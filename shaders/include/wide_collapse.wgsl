@@ -2,7 +2,7 @@
 // `WideBvh::from_binary_optimal`, src/bvh/wide/convert.rs; the kernels run it top-down:
 // wide_nodes_emit.wgsl level by level, then wide_nodes_finish.wgsl a subtree per invocation).
 // Wide node w is made from binary node `wide_sources[w].x`:
-// 1. Children, by one of two collapses (`params.collapse`):
+// 1. Children, by one of two collapses (the pipeline constant `WIDE_COLLAPSE`):
 //    - optimal: the split of 8 slots that costs_climb.wgsl chose for the binary node, each part
 //      expanded by its node's choices (collapse_choices.wgsl), left before right: Ylitie et al.'s
 //      SAH-optimal collapse;
@@ -38,16 +38,14 @@ struct WideParams {
     capacity: u32,
     // Always 0 (see unfused.wgsl).
     zero: u32,
-    // COLLAPSE_GREEDY or COLLAPSE_OPTIMAL.
-    collapse: u32,
-    pad0: u32,
-    pad1: u32,
-    pad2: u32,
 }
 
-// Values of `WideParams::collapse` (Rust twin: `WideCollapse`).
+// Values of `WIDE_COLLAPSE` (Rust twin: `WideCollapse`).
 const COLLAPSE_GREEDY: u32 = 0u;
 const COLLAPSE_OPTIMAL: u32 = 1u;
+// The collapse, fixed per pipeline (`WideConverter`): a pipeline holds the code of one, not a
+// branch over both (RADV: `wide_nodes_emit` 31,632 bytes of code with both, 27,156 greedy only).
+override WIDE_COLLAPSE: u32 = COLLAPSE_GREEDY;
 
 @group(0) @binding(0) var<uniform> params: WideParams;
 @group(0) @binding(1) var<storage, read> nodes: array<BvhNode>;
@@ -171,7 +169,7 @@ fn draft_wide_node(source: u32) -> WideDraft {
         // A tree of one leaf.
         set_child(&child, &child_index, 0u, top, source);
         count = 1u;
-    } else if params.collapse == COLLAPSE_OPTIMAL {
+    } else if WIDE_COLLAPSE == COLLAPSE_OPTIMAL {
         // (binary node, slots) still to expand, the next on top: at most 8, as each holds a slot.
         var pending: array<vec2<u32>, 8>;
         let k = wide_split(choices[source]);

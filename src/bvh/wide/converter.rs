@@ -11,11 +11,13 @@
 //! tree's `prim_indices`) into triangle indices and copies their triangles in order for the
 //! traversal. No CPU round trip.
 
+use std::sync::OnceLock;
+
 use super::convert::max_wide_nodes;
 use super::costs_climb::{CostParams, COSTS_CLIMB};
 use super::nodes_link::NODES_LINK;
 use super::triangles_gather::TRIANGLES_GATHER;
-use super::wide_nodes_emit::{WideParams, WIDE_NODES_EMIT};
+use super::wide_nodes_emit::{WideParams, WIDE_COLLAPSE_OVERRIDE, WIDE_NODES_EMIT};
 use super::wide_nodes_finish::WIDE_NODES_FINISH;
 use super::{WideCollapse, WideOptions};
 use crate::bvh::{BvhNode, SahParams};
@@ -38,8 +40,12 @@ pub const FINISH_POOL: u32 = 1024;
 pub struct WideConverter {
     link: Kernel<Items>,
     costs: Kernel<CostParams>,
-    emit: Kernel<WideParams>,
-    finish: Kernel<WideParams>,
+    /// `wide_nodes_emit` and `wide_nodes_finish` per collapse (`collapse as usize`), compiled
+    /// when first used: the collapse is a pipeline constant.
+    emit: [OnceLock<Kernel<WideParams>>; 2],
+    finish: [OnceLock<Kernel<WideParams>>; 2],
+    /// The finish's pool of subtree roots (`set_finish_pool`; `None`: FINISH_POOL).
+    finish_pool: Option<u32>,
     gather: Kernel<Items>,
     /// The collapse and the forced level dispatches of the next conversions.
     options: WideOptions,
@@ -54,8 +60,9 @@ impl WideConverter {
         Self {
             link: Kernel::new(ctx, &NODES_LINK),
             costs: Kernel::climb(ctx, &COSTS_CLIMB),
-            emit: Kernel::new(ctx, &WIDE_NODES_EMIT),
-            finish: Kernel::new(ctx, &WIDE_NODES_FINISH),
+            emit: Default::default(),
+            finish: Default::default(),
+            finish_pool: None,
             gather: Kernel::new(ctx, &TRIANGLES_GATHER),
             options: WideOptions::default(),
             sah: *sah,
@@ -91,19 +98,31 @@ impl WideConverter {
 
     /// Gives the finish's workgroups a pool of `roots` subtree roots (1..=`FINISH_POOL`; tests:
     /// a pool that fills gives the same tree); `None` restores the default.
-    pub fn set_finish_pool(&mut self, ctx: &GpuContext, roots: Option<u32>) -> Result<()> {
-        self.finish = match roots {
-            None => Kernel::new(ctx, &WIDE_NODES_FINISH),
-            Some(roots @ 1..=FINISH_POOL) => {
-                Kernel::with_overrides(ctx, &WIDE_NODES_FINISH, &[("POOL", f64::from(roots))])
-            }
-            Some(roots) => {
-                return Err(Error::InvalidArgument(format!(
-                    "a pool of {roots} subtree roots (1 to {FINISH_POOL})"
-                )))
-            }
-        };
+    pub fn set_finish_pool(&mut self, roots: Option<u32>) -> Result<()> {
+        if let Some(roots) = roots.filter(|roots| !(1..=FINISH_POOL).contains(roots)) {
+            return Err(Error::InvalidArgument(format!(
+                "a pool of {roots} subtree roots (1 to {FINISH_POOL})"
+            )));
+        }
+        self.finish_pool = roots;
+        self.finish = Default::default();
         Ok(())
+    }
+
+    /// The emit and finish kernels of the current collapse (and finish pool).
+    fn level_kernels(&self, ctx: &GpuContext) -> (&Kernel<WideParams>, &Kernel<WideParams>) {
+        let collapse = self.options.collapse;
+        let overrides = [(WIDE_COLLAPSE_OVERRIDE, collapse.override_value())];
+        let emit = self.emit[collapse as usize]
+            .get_or_init(|| Kernel::with_overrides(ctx, &WIDE_NODES_EMIT, &overrides));
+        let finish = self.finish[collapse as usize].get_or_init(|| {
+            let mut overrides = overrides.to_vec();
+            if let Some(roots) = self.finish_pool {
+                overrides.push(("POOL", f64::from(roots)));
+            }
+            Kernel::with_overrides(ctx, &WIDE_NODES_FINISH, &overrides)
+        });
+        (emit, finish)
     }
 
     /// Fixes the number of level dispatches (tests: every schedule gives the same tree); `None`
@@ -206,24 +225,15 @@ impl WideConverter {
             level_dispatches,
             capacity: wide.capacity,
             zero: 0,
-            collapse: match self.options.collapse {
-                WideCollapse::Greedy => 0,
-                WideCollapse::Optimal => 1,
-            },
-            _pad: [0; 3],
         };
+        let (emit, finish) = self.level_kernels(ctx);
         // The root's dispatch writes the record of the level after its last one.
         let top = START_LEVELS.min(level_dispatches);
-        pass.dispatch(
-            &self.emit,
-            Grid::workgroups(1, 1),
-            &params(0),
-            &buffers(top),
-        );
+        pass.dispatch(emit, Grid::workgroups(1, 1), &params(0), &buffers(top));
         for level in top + 1..=level_dispatches {
             let offset = u64::from(RECORD_WORDS * level) * 4;
             pass.dispatch_indirect(
-                &self.emit,
+                emit,
                 &wide.records[(level % 2) as usize],
                 offset,
                 &params(level),
@@ -232,7 +242,7 @@ impl WideConverter {
         }
         let last = level_dispatches + 1;
         pass.dispatch_indirect(
-            &self.finish,
+            finish,
             &wide.records[(last % 2) as usize],
             u64::from(RECORD_WORDS * last) * 4,
             &params(last),

@@ -71,15 +71,21 @@ pub enum WideCollapse {
     /// The default: on an H200 the optimal trees traced no faster (README, "SAH-optimal
     /// collapse").
     #[default]
-    Greedy,
+    Greedy = 0,
     /// Ylitie et al.'s SAH-optimal collapse: a dynamic program over the binary tree, bottom-up
     /// (kernels `nodes_link`, `costs_climb`), whose choices the conversion follows: a wide SAH
     /// 2-4.5 % lower and about a third fewer wide nodes on the shared scenes.
-    Optimal,
+    Optimal = 1,
 }
 
 impl WideCollapse {
     pub const ALL: &[WideCollapse] = &[WideCollapse::Greedy, WideCollapse::Optimal];
+
+    /// The value of the conversion kernels' override `WIDE_COLLAPSE` (`COLLAPSE_GREEDY`,
+    /// `COLLAPSE_OPTIMAL` in wide_collapse.wgsl).
+    pub fn override_value(self) -> f64 {
+        f64::from(self as u8)
+    }
 
     pub fn name(self) -> &'static str {
         match self {

@@ -17,11 +17,13 @@ pub struct WideParams {
     pub capacity: u32,
     /// Always 0: keeps the area products unfused.
     pub zero: u32,
-    /// 0: greedy, 1: optimal (`WideCollapse`).
-    pub collapse: u32,
-    pub _pad: [u32; 3],
 }
-const _: () = assert!(std::mem::size_of::<WideParams>() == 32);
+const _: () = assert!(std::mem::size_of::<WideParams>() == 16);
+
+/// The pipeline-overridable constant that fixes the collapse of `wide_nodes_emit` and
+/// `wide_nodes_finish` (`override WIDE_COLLAPSE` in wide_collapse.wgsl;
+/// `WideCollapse::override_value`).
+pub const WIDE_COLLAPSE_OVERRIDE: &str = "WIDE_COLLAPSE";
 
 kernel!(pub WIDE_NODES_EMIT: WideParams = "wide_nodes_emit"::"main", [64, 1, 1],
     [Read, ReadWrite, ReadWrite, ReadWrite, ReadWrite, Read, ReadWrite, Read]);
