@@ -469,28 +469,33 @@ impl TreeletKernels {
         dp: TreeletDp,
         team_below: u32,
     ) -> &Kernel<RoundParams> {
-        let teams = self.has_teams && team_below > 0;
+        let team_path = self.team_path(team_below);
         let slot = &self.compiled[(treelet_size - MIN_TREELET_SIZE) as usize][dp as usize];
-        slot[usize::from(teams)].get_or_init(|| {
-            let overrides = self.overrides(treelet_size, dp, team_below);
+        slot[usize::from(team_path)].get_or_init(|| {
+            let overrides = self.overrides(treelet_size, dp, team_path);
             Kernel::with_overrides(ctx, self.decl, &overrides)
         })
     }
 
-    /// The override values of the kernel `get` gives for these arguments (`TREELET_TEAMS` only
-    /// where the kernel declares it).
+    /// Whether the kernel dispatched with the team threshold `team_below` needs the team path.
+    fn team_path(&self, team_below: u32) -> bool {
+        self.has_teams && team_below > 0
+    }
+
+    /// The override values of the kernel with these settings (`TREELET_TEAMS` only where the
+    /// kernel declares it).
     fn overrides(
         &self,
         treelet_size: u32,
         dp: TreeletDp,
-        team_below: u32,
+        team_path: bool,
     ) -> Vec<(&'static str, f64)> {
         let mut overrides = vec![
             (TREELET_SIZE_OVERRIDE, f64::from(treelet_size)),
             (TREELET_DP_LOOP_OVERRIDE, dp.override_value()),
         ];
         if self.has_teams {
-            overrides.push((TREELET_TEAMS_OVERRIDE, f64::from(u8::from(team_below > 0))));
+            overrides.push((TREELET_TEAMS_OVERRIDE, f64::from(u8::from(team_path))));
         }
         overrides
     }
@@ -602,6 +607,7 @@ impl TreeletRounds {
             } else if level == 1 {
                 // The levels up to subtree_levels: a workgroup per few cut roots (level 1's
                 // arguments count them all); the treelet buffers but the teams' subsets.
+                // No team path there: its threshold does not apply.
                 let subtrees = self
                     .subtrees
                     .get(ctx, round.treelet_size, self.schedule.dp(), 0);
@@ -866,7 +872,7 @@ mod tests {
         use crate::gpu::shader_source;
         let teams = |kernels: &TreeletKernels, team_below: u32| {
             kernels
-                .overrides(7, TreeletDp::Unrolled, team_below)
+                .overrides(7, TreeletDp::Unrolled, kernels.team_path(team_below))
                 .iter()
                 .find(|(name, _)| *name == TREELET_TEAMS_OVERRIDE)
                 .map(|&(_, value)| value)
