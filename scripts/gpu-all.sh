@@ -194,8 +194,10 @@ step tests 150 bash -c tests
 kernel_stats() {
   xz -dc .gpu/shader-stats.xz > $work/shader-stats && chmod +x $work/shader-stats
   $work/shader-stats && $work/shader-stats treelets waves subtrees TREELET_SIZE=8
-  # The default schedules' treelet pipelines: without the team path.
+  # The default schedules' treelet pipelines: without the team path; the trace of a scene
+  # without point lights (every shared scene).
   $work/shader-stats treelets waves TREELET_TEAMS=0
+  $work/shader-stats paths_trace POINT_LIGHTS=0
 }
 export -f kernel_stats
 if [ -f .gpu/shader-stats.xz ]; then

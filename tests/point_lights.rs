@@ -2,12 +2,15 @@
 //! light, seen straight from above with primary rays only, shows albedo · intensity · cos θ
 //! (through the tonemap) where the light is visible and black where an occluder shadows it;
 //! every path vertex traces exactly one shadow ray per light, and the rays are counted (also in
-//! workgroups partly outside the image).
+//! workgroups partly outside the image). Both layouts trace every scene, the binary one and the
+//! wide one converted from it, to the same image and rays; with and without lights they run
+//! different pipelines (`POINT_LIGHTS_OVERRIDE`).
 
 mod common;
 
-use common::gpu;
+use common::{convert_wide, gpu};
 use glam::Vec3;
+use treelet::bvh::wide::{Layout, WideCollapse};
 use treelet::bvh::{build_sweep_sah, SahParams};
 use treelet::device::{Geometry, Tree};
 use treelet::scene::{Camera, Material, PointLight, Scene, Triangle};
@@ -50,21 +53,30 @@ fn scene(lights: Vec<PointLight>, blocker: bool) -> Scene {
     }
 }
 
+/// The image and the rays traced, through the binary layout, after checking that the wide
+/// layout traces the same.
 fn render(scene: &Scene) -> (image::RgbaImage, u64) {
     let bvh = build_sweep_sah(&scene.triangles, &SahParams::default());
     let geometry = Geometry::upload(gpu(), scene).unwrap();
-    let tree = Tree::upload(gpu(), &bvh).unwrap();
-    let settings = RenderSettings {
-        width: SIZE,
-        height: SIZE,
-        max_depth: 1,
-        ..RenderSettings::default()
-    };
-    let mut tracer = PathTracer::new(gpu(), settings).unwrap();
-    let stats = tracer
-        .trace(gpu(), &geometry, &tree, &scene.camera, scene.sky, SPP)
-        .unwrap();
-    (tracer.read_image(gpu()).unwrap(), stats.rays)
+    let mut tree = Tree::upload(gpu(), &bvh).unwrap();
+    convert_wide(&geometry, &mut tree, WideCollapse::Greedy);
+    let [binary, wide] = [Layout::Binary, Layout::Wide].map(|layout| {
+        let settings = RenderSettings {
+            width: SIZE,
+            height: SIZE,
+            max_depth: 1,
+            layout,
+            ..RenderSettings::default()
+        };
+        let mut tracer = PathTracer::new(gpu(), settings).unwrap();
+        let stats = tracer
+            .trace(gpu(), &geometry, &tree, &scene.camera, scene.sky, SPP)
+            .unwrap();
+        (tracer.read_image(gpu()).unwrap(), stats.rays)
+    });
+    assert_eq!(binary.1, wide.1, "rays traced, binary against wide");
+    assert!(binary.0 == wide.0, "the layouts' images differ");
+    binary
 }
 
 /// The red byte the tonemap (`image_tonemap.wgsl`: ACES fit, then sRGB) gives radiance `v`.

@@ -45,6 +45,9 @@ struct PointLight {
 // below 2^(32 - TALLY_SHIFT).
 var<workgroup> workgroup_tally: atomic<u32>;
 const TALLY_SHIFT: u32 = 7u;
+// 1: shadow rays towards the point lights (params.light_count of them); 0: a pipeline for scenes
+// without point lights, which holds no light loop and no shadow ray's traversal.
+override POINT_LIGHTS: u32 = 1u;
 // Invocations per workgroup (8 x 8).
 const WORKGROUP_INVOCATIONS: u32 = 64u;
 
@@ -139,7 +142,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
                 let p = path.origin + hit.t * path.dir;
                 let eps = 1e-4 * max(1.0, max(abs(p.x), max(abs(p.y), abs(p.z))));
                 path.origin = p + n * eps;
-                for (var l = 0u; l < params.light_count; l++) {
+                for (var l = 0u; POINT_LIGHTS != 0u && l < params.light_count; l++) {
                     let light = lights[l];
                     let to_light = light.position - path.origin;
                     let distance = length(to_light);

@@ -2,10 +2,12 @@
 //! `image_tonemap`). Traces are recorded into the frame's recording; every traced ray is counted
 //! on the GPU, and trace time comes from timestamp queries, so Mrays/s = rays / GPU trace time.
 
+use std::sync::OnceLock;
+
 use glam::Vec3;
 
 use super::image_tonemap::{TonemapParams, IMAGE_TONEMAP};
-use super::paths_trace::{TraceParams, PATHS_TRACE, PATHS_TRACE_WIDE};
+use super::paths_trace::{TraceParams, PATHS_TRACE, PATHS_TRACE_WIDE, POINT_LIGHTS_OVERRIDE};
 use crate::bvh::wide::Layout;
 use crate::device::{Geometry, Tree};
 use crate::gpu::{
@@ -89,8 +91,9 @@ impl RecordedTrace {
 
 pub struct PathTracer {
     settings: RenderSettings,
-    trace: Kernel<TraceParams>,
-    trace_wide: Kernel<TraceParams>,
+    /// The trace kernels per layout (binary, wide) and whether the scene has point lights,
+    /// compiled when first used (`trace_kernel`).
+    trace: [[OnceLock<Kernel<TraceParams>>; 2]; 2],
     tonemap: Kernel<TonemapParams>,
     accum: wgpu::Buffer,
     pixels: wgpu::Buffer,
@@ -119,8 +122,7 @@ impl PathTracer {
         }
         Ok(Self {
             settings,
-            trace: Kernel::new(ctx, &PATHS_TRACE),
-            trace_wide: Kernel::new(ctx, &PATHS_TRACE_WIDE),
+            trace: Default::default(),
             tonemap: Kernel::new(ctx, &IMAGE_TONEMAP),
             accum: storage_buffer_zeroed(ctx, "accumulation", pixel_count * 16)?,
             pixels: storage_buffer_zeroed(ctx, "pixels", pixel_count * 4)?,
@@ -143,6 +145,19 @@ impl PathTracer {
     /// trace clears the accumulation first.
     pub fn reset(&mut self) {
         self.samples_done = 0;
+    }
+
+    /// The trace kernel of `layout`, with shadow rays where the scene has point lights (without,
+    /// a pipeline that holds no light loop: `POINT_LIGHTS_OVERRIDE`).
+    fn trace_kernel(&self, ctx: &GpuContext, layout: Layout, lights: bool) -> &Kernel<TraceParams> {
+        let (decl, by_layout) = match layout {
+            Layout::Binary => (&PATHS_TRACE, &self.trace[0]),
+            Layout::Wide => (&PATHS_TRACE_WIDE, &self.trace[1]),
+        };
+        by_layout[usize::from(lights)].get_or_init(|| {
+            let overrides = [(POINT_LIGHTS_OVERRIDE, f64::from(u8::from(lights)))];
+            Kernel::with_overrides(ctx, decl, &overrides)
+        })
     }
 
     /// The counters of the last recorded trace (see `RecordedTrace::totals`).
@@ -188,17 +203,18 @@ impl PathTracer {
         }
         // What the leaves' references are tested through: the binary tree's indices into the
         // triangles, the wide tree's copies of its references' triangles.
-        let (kernel, nodes, leaf_data) = match s.layout {
-            Layout::Binary => (&self.trace, &tree.nodes, &tree.prim_indices),
+        let (nodes, leaf_data) = match s.layout {
+            Layout::Binary => (&tree.nodes, &tree.prim_indices),
             Layout::Wide => {
                 let wide = tree.wide.as_ref().ok_or_else(|| {
                     Error::InvalidArgument(
                         "the wide layout was asked for, but the tree was not converted".into(),
                     )
                 })?;
-                (&self.trace_wide, &wide.nodes, &wide.triangles)
+                (&wide.nodes, &wide.triangles)
             }
         };
+        let kernel = self.trace_kernel(rec.ctx, s.layout, geometry.light_count > 0);
         if self.samples_done == 0 {
             rec.encoder().clear_buffer(&self.accum, 0, None);
         }
@@ -223,9 +239,10 @@ impl PathTracer {
                     &geometry.lights,
                 ],
             );
-            self.samples_done += batch;
             remaining -= batch;
         }
+        // The dispatches' batches add up to `samples`.
+        self.samples_done += samples;
         Ok(RecordedTrace {
             dispatches,
             samples,

@@ -28,6 +28,12 @@ pub struct TraceParams {
     pub _pad: u32,
 }
 
+/// The pipeline-overridable constant that gives the trace kernels their shadow rays (`override
+/// POINT_LIGHTS` in path_integrator.wgsl): 1 for a scene with point lights, 0 for one without,
+/// whose pipeline holds no light loop and no second traversal call site (RADV: `paths_trace` 72 →
+/// 60 vector registers, `paths_trace_wide` 96 → 84; README, "Kernel statistics").
+pub const POINT_LIGHTS_OVERRIDE: &str = "POINT_LIGHTS";
+
 kernel!(pub PATHS_TRACE: TraceParams = "paths_trace"::"main", [8, 8, 1],
     [Read, Read, Read, Read, ReadWrite, ReadWrite, Read]);
 
