@@ -195,9 +195,10 @@ kernel_stats() {
   xz -dc .gpu/shader-stats.xz > $work/shader-stats && chmod +x $work/shader-stats
   $work/shader-stats && $work/shader-stats treelets waves subtrees TREELET_SIZE=8
   # The default schedules' treelet pipelines: without the team path; the trace of a scene
-  # without point lights (every shared scene).
+  # without point lights (every shared scene); trbvh's collapse (no pre-split references).
   $work/shader-stats treelets waves TREELET_TEAMS=0
   $work/shader-stats paths_trace POINT_LIGHTS=0
+  $work/shader-stats nodes_mark HAS_REFS=0
 }
 export -f kernel_stats
 if [ -f .gpu/shader-stats.xz ]; then

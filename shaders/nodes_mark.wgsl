@@ -32,10 +32,16 @@ struct CollapseParams {
     // Always 0: see unfused.wgsl; the area must round as it did in the treelet rounds, so
     // that Ct·A·N <= C finds exactly the leaves the treelet pass chose.
     zero: u32,
-    has_refs: u32,
     pad0: u32,
     pad1: u32,
+    pad2: u32,
 }
+
+// 1 when the primitives are pre-split references mapped through `ref_tris` (trbvh-split), 0 when
+// they are triangles: fixed per pipeline (`Collapse`), so that a pipeline holds the code of one
+// (RADV: without references 24 vector registers and 1,168 bytes of code, where the kernel with
+// both paths took 84 registers and 11,532 bytes).
+override HAS_REFS: u32 = 1u;
 
 @group(0) @binding(0) var<uniform> params: CollapseParams;
 @group(0) @binding(1) var<storage, read> nodes: array<BvhNode>;
@@ -199,7 +205,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let node = nodes[i];
     let count = prim_counts[i];
     let cost = costs[i];
-    let slotted = params.has_refs == 0u && (node.right_or_count & LEAF_FLAG) != 0u;
+    let slotted = HAS_REFS == 0u && (node.right_or_count & LEAF_FLAG) != 0u;
     // The output leaf holding a working leaf's primitives and their position in its range.
     var owner = i;
     var position = 0u;
@@ -244,7 +250,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     var prims = 0u;
     if leaf {
         // Not a select: WGSL evaluates both of its arguments, and the gather walks the subtree.
-        if params.has_refs != 0u {
+        if HAS_REFS != 0u {
             let n = min(params.leaf_count, count_limit[0]);
             if count <= FRONTIER {
                 prims = gather_frontier(i, n);

@@ -6,9 +6,11 @@
 //! pre-split references, where the mark found its slot in its output leaf). Three dispatches. CPU
 //! twin: `WorkingTree::collapse`.
 
+use std::sync::OnceLock;
+
 use super::dp::CostModel;
 use super::nodes_compact::{CompactParams, NODES_COMPACT};
-use super::nodes_mark::{MarkParams, NODES_MARK};
+use super::nodes_mark::{MarkParams, HAS_REFS_OVERRIDE, NODES_MARK};
 use super::rounds::TreeletState;
 use crate::gpu::{storage_buffer_zeroed, GpuContext, ItemCount, Kernel, Pass};
 use crate::sort::PrefixScan;
@@ -31,7 +33,9 @@ pub(crate) struct CollapseBuffers<'a> {
 }
 
 pub(crate) struct Collapse {
-    mark: Kernel<MarkParams>,
+    /// `nodes_mark` for triangles and for pre-split references (`HAS_REFS_OVERRIDE`), compiled
+    /// when first used.
+    mark: [OnceLock<Kernel<MarkParams>>; 2],
     compact: Kernel<CompactParams>,
     scan: PrefixScan,
     /// Bound as `ref_tris` when there are no references (the kernels then never read it).
@@ -41,7 +45,7 @@ pub(crate) struct Collapse {
 impl Collapse {
     pub fn new(ctx: &GpuContext) -> Result<Self> {
         Ok(Self {
-            mark: Kernel::new(ctx, &NODES_MARK),
+            mark: Default::default(),
             compact: Kernel::new(ctx, &NODES_COMPACT),
             scan: PrefixScan::new(ctx),
             no_refs: storage_buffer_zeroed(ctx, "no references", 4)?,
@@ -69,18 +73,24 @@ impl Collapse {
         let node_count = 2 * n - 1;
         let has_refs = u32::from(out.ref_tris.is_some());
         let ref_tris = out.ref_tris.unwrap_or(&self.no_refs);
-        let grid = self.mark.grid(ctx, node_count);
+        let mark_kernel = self.mark[has_refs as usize].get_or_init(|| {
+            Kernel::with_overrides(
+                ctx,
+                &NODES_MARK,
+                &[(HAS_REFS_OVERRIDE, f64::from(has_refs))],
+            )
+        });
+        let grid = mark_kernel.grid(ctx, node_count);
         let mark = MarkParams {
             leaf_count: n,
             row_pitch: grid.row_pitch,
             max_leaf_size: model.max_leaf_size,
             ct: model.ct,
             zero: 0,
-            has_refs,
-            _pad: [0; 2],
+            _pad: [0; 3],
         };
         pass.dispatch(
-            &self.mark,
+            mark_kernel,
             grid,
             &mark,
             &[

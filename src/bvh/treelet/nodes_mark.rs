@@ -14,10 +14,13 @@ pub struct MarkParams {
     pub ct: f32,
     /// Always 0: keeps the kernel's area products unfused (see unfused.wgsl).
     pub zero: u32,
-    /// 1 when the primitives are pre-split references mapped through `ref_tris`.
-    pub has_refs: u32,
-    pub _pad: [u32; 2],
+    pub _pad: [u32; 3],
 }
+const _: () = assert!(std::mem::size_of::<MarkParams>() == 32);
+
+/// The pipeline-overridable constant that tells `nodes_mark` whether the primitives are
+/// pre-split references (`override HAS_REFS` in nodes_mark.wgsl): 1 or 0, a pipeline each.
+pub const HAS_REFS_OVERRIDE: &str = "HAS_REFS";
 
 kernel!(pub NODES_MARK: MarkParams = "nodes_mark"::"main", [64, 1, 1],
     [Read, Read, Read, Read, ReadWrite, ReadWrite, Read, Read, Read, ReadWrite]);
