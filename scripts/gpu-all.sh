@@ -193,12 +193,13 @@ step tests 150 bash -c tests
 # for treelets of 7 and 8 leaves, when `bash scripts/shader-stats.sh pack` packed the example.
 kernel_stats() {
   xz -dc .gpu/shader-stats.xz > $work/shader-stats && chmod +x $work/shader-stats
-  $work/shader-stats && $work/shader-stats treelets waves subtrees TREELET_SIZE=8
+  $work/shader-stats
   # The default schedules' treelet pipelines: without the team path; the trace of a scene
   # without point lights (every shared scene); trbvh's collapse (no pre-split references).
   $work/shader-stats treelets waves TREELET_TEAMS=0
   $work/shader-stats paths_trace POINT_LIGHTS=0
   $work/shader-stats nodes_mark HAS_REFS=0
+  $work/shader-stats treelets waves subtrees TREELET_SIZE=8
 }
 export -f kernel_stats
 if [ -f .gpu/shader-stats.xz ]; then
