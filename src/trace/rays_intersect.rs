@@ -19,9 +19,14 @@ pub struct QueryParams {
     row_pitch: u32,
     /// Always 0: keeps the triangle test's products unfused (`unfused` in unfused.wgsl).
     opaque_zero: u32,
-    /// 1: any hit in the interval (stops at the first), 0: the closest hit.
-    any_hit: u32,
+    _pad: u32,
 }
+const _: () = assert!(std::mem::size_of::<QueryParams>() == 16);
+
+/// The pipeline-overridable constant that picks the query (`override ANY_HIT` in
+/// ray_queries.wgsl): 1 for any hit in the interval (the traversal stops at the first), 0 for
+/// the closest hit.
+pub const ANY_HIT_OVERRIDE: &str = "ANY_HIT";
 
 kernel!(pub RAYS_INTERSECT: QueryParams = "rays_intersect"::"main", [64, 1, 1],
     [Read, Read, Read, Read, ReadWrite, ReadWrite]);
@@ -95,9 +100,10 @@ fn query(
     }
     // What the leaves' references are tested through: the binary tree's indices into the
     // triangles, the wide tree's copies of its references' triangles.
+    let overrides = [(ANY_HIT_OVERRIDE, f64::from(u8::from(any_hit)))];
     let (kernel, nodes, leaf_data) = match layout {
         Layout::Binary => (
-            Kernel::new(ctx, &RAYS_INTERSECT),
+            Kernel::with_overrides(ctx, &RAYS_INTERSECT, &overrides),
             &tree.nodes,
             &tree.prim_indices,
         ),
@@ -106,7 +112,7 @@ fn query(
                 Error::InvalidArgument("the tree has no wide layout (convert it first)".into())
             })?;
             (
-                Kernel::new(ctx, &RAYS_INTERSECT_WIDE),
+                Kernel::with_overrides(ctx, &RAYS_INTERSECT_WIDE, &overrides),
                 &wide.nodes,
                 &wide.triangles,
             )
@@ -117,7 +123,7 @@ fn query(
         ray_count,
         row_pitch: grid.row_pitch,
         opaque_zero: 0,
-        any_hit: u32::from(any_hit),
+        _pad: 0,
     };
     let ray_buffer = storage_buffer(ctx, "rays", rays)?;
     let hits = storage_buffer_zeroed(ctx, "hits", std::mem::size_of_val(rays) as u64 / 2)?;
