@@ -156,22 +156,27 @@ export -f teams
 # The phased rounds (`--phases`, README "Phased rounds"): each round in 7 phases by depth instead
 # of its 20-37 treelet levels bottom-up, the first round in 7 or 14 (SAH -0.3 to +0.35 % from the
 # paper's trees on the shared scenes with 14, 28 phases in all), beside the bottom-up rounds, all
-# untuned; the whole build, its treelet stages and SAH; then 4 rounds of 4 phases, the first of
-# 5 or 6 (17 or 18 phases; treelets whose leaves stay within 3 levels of their roots, SAH -0.9 to
-# +0.75 % with trbvh-split's). Then on two scenes 4 rounds of 7, and teams of 32 per treelet in phases below 2048
+# untuned; the whole build, its treelet stages and SAH; then 3 rounds of 6, 4 and 4 phases (the
+# preset `phased`, 14 phases; the later rounds' treelets with their leaves within 3 levels of
+# their roots, SAH -0.13 to +0.94 % with trbvh-split's) and 4 rounds of 5, 4, 4 and 4 (17, the
+# previous preset: -0.60 to +0.75 %). Then on two scenes 4 rounds of 7, and teams of 32 per treelet in phases below 2048
 # treelets and in every phase (the same tree): a phase holds thousands of treelets, where the
 # lone DP's throughput matters more than one treelet's latency.
 phases() {
   for s in ${PHASE_SCENES:-conference crytek_sponza sibenik lost_empire field:224 field:707 field:2000}; do
-    timeout 40 $TREELET bench --scene $s --builder trbvh,trbvh-split --phases 0,7 --first-round-phases 7,14 \
+    # The bottom-up rounds (phases 0) and the preset first, then the previous preset, then 7, 7, 7
+    # and 14, 7, 7.
+    timeout 30 $TREELET bench --scene $s --builder trbvh,trbvh-split --preset phased --phases 0,4 \
       --tune-schedule off $small >> $res/phases.jsonl
-    timeout 30 $TREELET bench --scene $s --builder trbvh,trbvh-split --rounds 4 --phases 4 --first-round-phases 5,6 \
+    timeout 30 $TREELET bench --scene $s --builder trbvh,trbvh-split --rounds 4 --phases 4 --first-round-phases 5 \
+      --tune-schedule off $small >> $res/phases.jsonl
+    timeout 40 $TREELET bench --scene $s --builder trbvh,trbvh-split --phases 7 --first-round-phases 7,14 \
       --tune-schedule off $small >> $res/phases.jsonl
   done
   for s in conference field:707; do
-    timeout 30 $TREELET bench --scene $s --builder trbvh --rounds 4 --phases 4 --first-round-phases 5 \
+    timeout 30 $TREELET bench --scene $s --builder trbvh --preset phased \
       --team-below 0,2048,4294967295 --tune-schedule off $small >> $res/phases.jsonl
-    # Every dispatch of 5, 4, 4, 4 timed (roots_phase against treelets_optimize, phase by phase).
+    # Every dispatch of 6, 4, 4 timed (roots_phase against treelets_optimize, phase by phase).
     timeout 30 $TREELET bench --scene $s --builder trbvh --preset phased --profile-dispatches \
       --tune-schedule off --width 64 --height 64 --spp 1 --repeats 5 >> $res/phases_profile.jsonl
     timeout 20 $TREELET bench --scene $s --builder trbvh --phases 7 --rounds 4 --tune-schedule off $small \

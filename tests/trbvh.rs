@@ -461,7 +461,7 @@ fn a_cheaper_last_round_builds_its_own_tree() {
 /// cut short by the depth bound); teams and the DP's loop form build the same tree as lone
 /// invocations; the phased rounds build another tree than the bottom-up rounds (the agreement
 /// checks tolerate near-ties, so they alone would pass a GPU that ignored the phases), within
-/// 1 % of its SAH here, in 7 phases a round and in 4 rounds of 5, 4, 4 and 4 phases.
+/// 1 % of its SAH here, in 7 phases a round and in 6, 4 and 4 phases (the preset).
 #[test]
 fn phased_rounds_equal_their_cpu_twin() {
     let builder =
@@ -521,7 +521,7 @@ fn phased_rounds_equal_their_cpu_twin() {
     let geometry = Geometry::upload(gpu(), &scene_of(random_soup(2500, 45))).unwrap();
     builder.settings = TreeletSettings::BALANCED;
     let bottom_up = builder.build_stages(gpu(), &geometry).unwrap();
-    // 7 phases a round, and 4 rounds of 5, 4, 4 and 4 phases, whose treelets the depth bound cuts
+    // 7 phases a round, and 3 rounds of 6, 4 and 4 phases, whose treelets the depth bound cuts
     // short (teams finish them from the subsets' costs of their DP, lone invocations by searching
     // their full set's partition): teams (every phase) and the DP's loop form build the phased
     // tree of lone invocations.

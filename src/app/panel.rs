@@ -303,7 +303,7 @@ fn treelet_order(ui: &mut egui::Ui, settings: &mut ViewSettings) {
     };
     let orders = [
         ("bottom-up (the paper's)", TreeletSettings::BALANCED),
-        ("phased (17 steps)", TreeletSettings::PHASED),
+        ("phased (14 steps)", TreeletSettings::PHASED),
     ];
     let mut selected = TreeletSettings {
         split_percent: 0,
@@ -323,8 +323,8 @@ fn treelet_order(ui: &mut egui::Ui, settings: &mut ViewSettings) {
         .response
         .on_hover_text(
             "The treelet rounds: the paper's 3 rounds bottom-up, a step per treelet level \
-             (57-108 on the shared scenes), or 4 rounds of 5, 4, 4 and 4 phases by depth, \
-             17 steps of many treelets each, another tree within 0.6 % of the paper's SAH \
+             (57-108 on the shared scenes), or 6, 4 and 4 phases by depth, 14 steps of many \
+             treelets each, another tree within 0.9 % of the paper's SAH \
              (README, \"Phased rounds\")",
         );
     settings.select_builder(settings.builder.with_treelet_settings(TreeletSettings {

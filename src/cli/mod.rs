@@ -67,7 +67,7 @@ pub struct TraceArgs {
     #[arg(long, default_value_t = SahParams::default().max_leaf_size)]
     max_leaf_size: u32,
     /// Treelet preset for trbvh: fast (n=5, 1 round), balanced (n=7, 3 rounds, the paper's; the
-    /// default), high (n=8, 4 rounds) or phased (n=7, 4 rounds of 5, 4, 4 and 4 phases)
+    /// default), high (n=8, 4 rounds) or phased (n=7, 3 rounds of 6, 4 and 4 phases)
     #[arg(long, value_parser = parse_preset)]
     preset: Option<TreeletSettings>,
     /// Leaves per treelet (3..=8) for trbvh, overriding the preset; `bench` takes a comma-separated list

@@ -121,16 +121,17 @@ impl TreeletSettings {
         phases: None,
         first_round_phases: None,
     };
-    /// The paper's treelets in phased rounds with the fewest dependent steps that keep its tree
-    /// quality: 4 rounds of 5, 4, 4 and 4 phases (17 steps instead of 57-108 treelet levels;
-    /// SAH within 0.6 % of `BALANCED`'s on the shared scenes, README "Phased rounds").
+    /// The paper's treelets and rounds in phases, with the fewest dependent steps that keep its
+    /// tree quality: 3 rounds of 6, 4 and 4 phases (14 steps instead of 57-108 treelet levels;
+    /// SAH within 0.9 % of `BALANCED`'s on the shared scenes, trbvh and trbvh-split, README
+    /// "Phased rounds").
     pub const PHASED: Self = Self {
         treelet_size: 7,
-        rounds: 4,
+        rounds: 3,
         split_percent: 0,
         last_round_size: None,
         phases: Some(4),
-        first_round_phases: Some(5),
+        first_round_phases: Some(6),
     };
 
     /// Leaves per treelet of round `round` (from 0).
