@@ -163,22 +163,28 @@ export -f teams
 # treelets and in every phase (the same tree): a phase holds thousands of treelets, where the
 # lone DP's throughput matters more than one treelet's latency.
 phases() {
-  for s in ${PHASE_SCENES:-conference crytek_sponza sibenik lost_empire field:224 field:707 field:2000}; do
-    # The bottom-up rounds (phases 0) and the preset first, then the previous preset, then 7, 7, 7
-    # and 14, 7, 7.
+  local scenes=${PHASE_SCENES:-conference crytek_sponza sibenik lost_empire field:224 field:707 field:2000}
+  # In the order of what decides most, as the step's cap may stop it: the bottom-up rounds
+  # (phases 0) against the preset on every scene; teams in the preset's phases; every dispatch of
+  # the preset timed (roots_phase against treelets_optimize, phase by phase); then the previous
+  # preset, 7, 7, 7 and 14, 7, 7.
+  for s in $scenes; do
     timeout 30 $TREELET bench --scene $s --builder trbvh,trbvh-split --preset phased --phases 0,4 \
       --tune-schedule off $small >> $res/phases.jsonl
+  done
+  for s in conference field:707; do
+    timeout 30 $TREELET bench --scene $s --builder trbvh --preset phased \
+      --team-below 0,2048,4294967295 --tune-schedule off $small >> $res/phases.jsonl
+    timeout 30 $TREELET bench --scene $s --builder trbvh --preset phased --profile-dispatches \
+      --tune-schedule off --width 64 --height 64 --spp 1 --repeats 5 >> $res/phases_profile.jsonl
+  done
+  for s in $scenes; do
     timeout 30 $TREELET bench --scene $s --builder trbvh,trbvh-split --rounds 4 --phases 4 --first-round-phases 5 \
       --tune-schedule off $small >> $res/phases.jsonl
     timeout 40 $TREELET bench --scene $s --builder trbvh,trbvh-split --phases 7 --first-round-phases 7,14 \
       --tune-schedule off $small >> $res/phases.jsonl
   done
   for s in conference field:707; do
-    timeout 30 $TREELET bench --scene $s --builder trbvh --preset phased \
-      --team-below 0,2048,4294967295 --tune-schedule off $small >> $res/phases.jsonl
-    # Every dispatch of 6, 4, 4 timed (roots_phase against treelets_optimize, phase by phase).
-    timeout 30 $TREELET bench --scene $s --builder trbvh --preset phased --profile-dispatches \
-      --tune-schedule off --width 64 --height 64 --spp 1 --repeats 5 >> $res/phases_profile.jsonl
     timeout 20 $TREELET bench --scene $s --builder trbvh --phases 7 --rounds 4 --tune-schedule off $small \
       >> $res/phases.jsonl
     timeout 30 $TREELET bench --scene $s --builder trbvh --phases 7 --first-round-phases 14 \
