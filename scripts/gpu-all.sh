@@ -165,8 +165,8 @@ export -f teams
 phases() {
   local scenes=${PHASE_SCENES:-conference crytek_sponza sibenik lost_empire field:224 field:707 field:2000}
   # In the order of what decides most, as the step's cap may stop it: the bottom-up rounds
-  # (phases 0) against the preset on every scene; teams in the preset's phases; every dispatch of
-  # the preset timed (roots_phase against treelets_optimize, phase by phase); then the previous
+  # (phases 0) against the preset on every scene; teams in the preset's phases; the roots' slots
+  # per workgroup (the GPU default) against per root; every dispatch of the preset timed (roots_phase against treelets_optimize, phase by phase); then the previous
   # preset, 7, 7, 7 and 14, 7, 7.
   for s in $scenes; do
     timeout 30 $TREELET bench --scene $s --builder trbvh,trbvh-split --preset phased --phases 0,4 \
@@ -175,6 +175,8 @@ phases() {
   for s in conference field:707; do
     timeout 30 $TREELET bench --scene $s --builder trbvh --preset phased \
       --team-below 0,2048,4294967295 --tune-schedule off $small >> $res/phases.jsonl
+    timeout 30 $TREELET bench --scene $s --builder trbvh --preset phased \
+      --root-slots workgroup,root --tune-schedule off $small >> $res/phases.jsonl
     timeout 30 $TREELET bench --scene $s --builder trbvh --preset phased --profile-dispatches \
       --tune-schedule off --width 64 --height 64 --spp 1 --repeats 5 >> $res/phases_profile.jsonl
   done

@@ -11,10 +11,14 @@
 // A published depth carries its phase's stamp (k + 1 in the high byte), so a phase reads only
 // its own and no phase zeroes the words for the next (the round starts with all zero). Roots of
 // one phase lie at least `phases` levels apart and a treelet's leaves at most `phases` − 1 below
-// its root (treelet_dp.wgsl's formation), so their treelets are disjoint. A workgroup reserves
-// the slots of its roots with one device atomic; the workgroup that finishes last (a ticket that
-// counts on over the round's phases, each a dispatch of the same grid) writes the phase's
-// indirect arguments (`optimize_workgroups`, treelet_round.wgsl).
+// its root (treelet_dp.wgsl's formation), so their treelets are disjoint.
+// A root's slot comes from the bucket's counter, and whoever takes a slot that needs one more
+// workgroup of the phase's treelets_optimize dispatch raises its indirect arguments to cover it
+// (`atomicMax`: the schedule is zero at the round's start), so no workgroup waits for the others
+// and none finishes the phase. On GPUs a workgroup takes its roots' slots with one device atomic
+// (`AGGREGATE_ROOTS`, two workgroup barriers); a CPU device takes one per root, as a kernel with
+// barriers runs there as a coroutine of its SIMD batches (lavapipe: 8.4 → 2.6 ms per dispatch
+// over conference's nodes without them).
 #include "treelet_round.wgsl"
 
 const WORKGROUP: u32 = 256u;
@@ -33,16 +37,28 @@ const WORKGROUP: u32 = 256u;
 // The stamp of phase k: k + 1 above the 24 bits of the depth residue + 1.
 const PHASE_STAMP: u32 = 1u << 24u;
 
+// 1: a workgroup reserves its roots' slots with one device atomic (GPUs); 0: each root its own
+// (CPU devices: no barrier in the kernel).
+override AGGREGATE_ROOTS: u32 = 1u;
+
 var<workgroup> workgroup_roots: atomic<u32>;
 var<workgroup> workgroup_first: u32;
-var<workgroup> is_last: u32;
+
+// Raises the phase's treelets_optimize arguments to cover `treelets` treelets
+// (`optimize_workgroups`, in rows of at most MAX_WORKGROUPS_X as `dispatch_args` makes them).
+// The arguments end as the most that any count raised them to, which covers the final count: a
+// dispatch of teams that turns lone past params.team_below keeps the teams' larger grid, whose
+// extra workgroups find no treelet.
+fn raise_arguments(treelets: u32) {
+    let groups = optimize_workgroups(treelets);
+    let at = SCHEDULE_ARGS + 3u * (params.level - 1u);
+    atomicMax(&schedule[at], min(groups, MAX_WORKGROUPS_X));
+    atomicMax(&schedule[at + 1u], (groups + MAX_WORKGROUPS_X - 1u) / MAX_WORKGROUPS_X);
+    atomicMax(&schedule[at + 2u], 1u);
+}
 
 @compute @workgroup_size(WORKGROUP)
-fn main(
-    @builtin(global_invocation_id) gid: vec3<u32>,
-    @builtin(local_invocation_index) lid: u32,
-    @builtin(num_workgroups) nwg: vec3<u32>,
-) {
+fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let j = gid.x + gid.y * params.row_pitch;
     let n = min(params.count, count_limit[0]);
     let phase = params.phases - 1u - params.residue;
@@ -66,7 +82,19 @@ fn main(
         atomicStore(&depths[j], stamp + residue + 1u);
         takes = residue == params.residue;
     }
-    let slot = params.level - 1u;
+    let bucket = params.level - 1u;
+    if AGGREGATE_ROOTS == 0u {
+        if takes {
+            let slot = atomicAdd(&schedule[bucket], 1u);
+            roots[slot] = j;
+            // Only counts that need one more workgroup raise the arguments: each team's, or the
+            // first treelet of each workgroup of lone invocations.
+            if slot % OPTIMIZE_WORKGROUP == 0u || slot + 1u < params.team_below {
+                raise_arguments(slot + 1u);
+            }
+        }
+        return;
+    }
     var rank = 0u;
     if takes {
         rank = atomicAdd(&workgroup_roots, 1u);
@@ -75,30 +103,13 @@ fn main(
     if lid == 0u {
         let count = atomicLoad(&workgroup_roots);
         if count != 0u {
-            workgroup_first = atomicAdd(&schedule[slot], count);
+            let first = atomicAdd(&schedule[bucket], count);
+            workgroup_first = first;
+            raise_arguments(first + count);
         }
     }
     workgroupBarrier();
     if takes {
         roots[workgroup_first + rank] = j;
     }
-    // Release: the workgroup's roots are counted before the ticket is taken.
-    storageBarrier();
-    if lid == 0u {
-        let ticket = atomicAdd(&schedule[SCHEDULE_TICKET], 1u) + 1u;
-        is_last = u32(ticket == params.level * nwg.x * nwg.y);
-    }
-    if workgroupUniformLoad(&is_last) == 0u {
-        return;
-    }
-    // Acquire: every workgroup's count is visible.
-    storageBarrier();
-    if lid != 0u {
-        return;
-    }
-    let args = dispatch_args(optimize_workgroups(atomicLoad(&schedule[slot])));
-    let at = SCHEDULE_ARGS + 3u * slot;
-    atomicStore(&schedule[at], args.x);
-    atomicStore(&schedule[at + 1u], args.y);
-    atomicStore(&schedule[at + 2u], args.z);
 }

@@ -330,7 +330,8 @@ fn bench_last_round_size_reports_each_size() {
 /// reported in `phases` (null: bottom-up) and in no other builder's record: both trees are valid,
 /// the phased one within 1 % of the bottom-up one's SAH, and the phases take no treelet levels of
 /// their own (no climb). Too few phases (fewer than 3), or phases with overlapped rounds, are
-/// refused; a phased preset's first-round phases go to its phased variants only.
+/// refused; a phased preset's first-round phases go to its phased variants only. `--root-slots`
+/// reports both ways for the phased rounds alone, each with the same tree.
 #[test]
 fn bench_phases_reports_each_count() {
     let records = quick_bench("lbvh,trbvh", &["--phases", "0,7"]);
@@ -361,6 +362,21 @@ fn bench_phases_reports_each_count() {
     assert_eq!(u64_values(&records, "phases"), [None, Some(4)]);
     assert_eq!(u64_values(&records, "first_round_phases"), [None, Some(6)]);
     assert!(records.iter().all(|r| r["valid"] == true), "{records:?}");
+    let records = quick_bench(
+        "trbvh",
+        &[
+            "--preset",
+            "phased",
+            "--phases",
+            "0,4",
+            "--root-slots",
+            "workgroup,root",
+        ],
+    );
+    let slots: Vec<Option<&str>> = records.iter().map(|r| r["root_slots"].as_str()).collect();
+    assert_eq!(slots, [None, None, Some("workgroup"), Some("root")]);
+    assert_eq!(records[2]["sah"], records[3]["sah"]);
+    assert_eq!(records[0]["sah"], records[1]["sah"]);
     assert_trbvh_bench_refuses(
         &["--phases", "7", "--round-overlap", "6"],
         "the phased treelet rounds take no overlap, subtrees",

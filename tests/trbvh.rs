@@ -12,8 +12,8 @@ use rand::Rng;
 use treelet::bvh::lbvh::{build_lbvh_from_boxes_cpu, prim_boxes_cpu, TRBVH_KEY_BITS};
 use treelet::bvh::treelet::{
     build_trbvh_cpu, optimize_lbvh_cpu, overlap_reach, solve_treelet, subsets_by_size,
-    surface_area, CostModel, RoundSchedule, TrbvhBuilder, TreeletDp, TreeletLeaf, TreeletSettings,
-    WorkingTree, MAX_LEVEL_DISPATCHES, MAX_PHASES, MAX_SUBTREE_LEVELS, MIN_PHASES,
+    surface_area, CostModel, RootSlots, RoundSchedule, TrbvhBuilder, TreeletDp, TreeletLeaf,
+    TreeletSettings, WorkingTree, MAX_LEVEL_DISPATCHES, MAX_PHASES, MAX_SUBTREE_LEVELS, MIN_PHASES,
 };
 use treelet::bvh::wide::{validate_wide_with_references, Layout, WideOptions};
 use treelet::bvh::{
@@ -523,8 +523,9 @@ fn phased_rounds_equal_their_cpu_twin() {
     let bottom_up = builder.build_stages(gpu(), &geometry).unwrap();
     // 7 phases a round, and 3 rounds of 6, 4 and 4 phases, whose treelets the depth bound cuts
     // short (teams finish them from the subsets' costs of their DP, lone invocations by searching
-    // their full set's partition): teams (every phase) and the DP's loop form build the phased
-    // tree of lone invocations.
+    // their full set's partition): teams (every phase), the DP's loop form and the roots' slots
+    // taken per workgroup and per root (teams too: every team's slot raises the phase's
+    // arguments) build the phased tree of lone invocations.
     let mut phased_trees = Vec::new();
     for settings in [phased(7, 3, 7), TreeletSettings::PHASED] {
         builder.settings = settings;
@@ -537,6 +538,24 @@ fn phased_rounds_equal_their_cpu_twin() {
             },
             RoundSchedule {
                 dp: Some(TreeletDp::Loop),
+                ..RoundSchedule::default()
+            },
+            RoundSchedule {
+                root_slots: Some(RootSlots::Workgroup),
+                ..RoundSchedule::default()
+            },
+            RoundSchedule {
+                root_slots: Some(RootSlots::Root),
+                ..RoundSchedule::default()
+            },
+            RoundSchedule {
+                root_slots: Some(RootSlots::Workgroup),
+                team_below: Some(u32::MAX),
+                ..RoundSchedule::default()
+            },
+            RoundSchedule {
+                root_slots: Some(RootSlots::Root),
+                team_below: Some(u32::MAX),
                 ..RoundSchedule::default()
             },
         ] {

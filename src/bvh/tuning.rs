@@ -437,6 +437,8 @@ fn without_defaults(schedule: BuildSchedule, space: &TuningSpace) -> BuildSchedu
             subtree_width: r
                 .subtree_width
                 .filter(|&w| r.subtree_levels() > 0 && w != space.subtree_width),
+            // Not tuned: as the starting schedule has it.
+            root_slots: r.root_slots,
         },
         sort_tile_items: schedule
             .sort_tile_items

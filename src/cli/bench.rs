@@ -11,7 +11,7 @@ use clap::Args;
 use serde::Serialize;
 use treelet::anim::load_still;
 use treelet::bvh::treelet::{
-    RoundSchedule, TreeletDp, MAX_LEVEL_DISPATCHES, MAX_SUBTREE_LEVELS, SUBTREE_LIST,
+    RootSlots, RoundSchedule, TreeletDp, MAX_LEVEL_DISPATCHES, MAX_SUBTREE_LEVELS, SUBTREE_LIST,
 };
 use treelet::bvh::wide::{
     validate_wide, validate_wide_with_references, wide_sah_costs, Layout, WideCollapse,
@@ -102,6 +102,12 @@ pub struct BenchArgs {
     #[arg(long, value_delimiter = ',',
           value_parser = clap::value_parser!(u32).range(1..=i64::from(SUBTREE_LIST)))]
     subtree_width: Vec<u32>,
+    /// How the phased rounds' roots take their slots in a phase's bucket: workgroup (one device
+    /// atomic per workgroup, between two workgroup barriers; the default on GPUs) or root (one per
+    /// root, no barrier; the default on CPU devices); trbvh, trbvh-split with --phases or the
+    /// phased preset; a comma-separated list to compare. Not tuned. The tree is the same for both
+    #[arg(long, value_delimiter = ',', value_enum)]
+    root_slots: Vec<RootSlotsArg>,
     /// Tune the build schedule on this device and scene after the warm-up and before the timed
     /// builds: the options above, --sort-tile-items and --wide-level-dispatches, where they are
     /// not given, are varied one at a time from their defaults (every schedule builds the same
@@ -153,6 +159,22 @@ impl From<DpForm> for TreeletDp {
     }
 }
 
+/// `bench --root-slots`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum RootSlotsArg {
+    Workgroup,
+    Root,
+}
+
+impl From<RootSlotsArg> for RootSlots {
+    fn from(slots: RootSlotsArg) -> Self {
+        match slots {
+            RootSlotsArg::Workgroup => RootSlots::Workgroup,
+            RootSlotsArg::Root => RootSlots::Root,
+        }
+    }
+}
+
 /// A `--round-overlap` value: a reach, or none.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct Reach(Option<u32>);
@@ -186,6 +208,7 @@ impl BenchArgs {
                 ("--round-overlap", !self.round_overlap.is_empty()),
                 ("--subtree-levels", !self.subtree_levels.is_empty()),
                 ("--subtree-width", !self.subtree_width.is_empty()),
+                ("--root-slots", !self.root_slots.is_empty()),
             ],
         )?;
         // No `--round-overlap` and `none` both mean one round after another.
@@ -204,16 +227,19 @@ impl BenchArgs {
                         for &overlap in &overlaps {
                             for subtree_levels in or_default(&self.subtree_levels) {
                                 for subtree_width in or_default(&self.subtree_width) {
-                                    schedules.push(RoundSchedule {
-                                        level_dispatches,
-                                        team_below,
-                                        climb_team_below,
-                                        dp: dp.map(TreeletDp::from),
-                                        climb_dp: climb_dp.map(TreeletDp::from),
-                                        overlap,
-                                        subtree_levels,
-                                        subtree_width,
-                                    });
+                                    for root_slots in or_default(&self.root_slots) {
+                                        schedules.push(RoundSchedule {
+                                            level_dispatches,
+                                            team_below,
+                                            climb_team_below,
+                                            dp: dp.map(TreeletDp::from),
+                                            climb_dp: climb_dp.map(TreeletDp::from),
+                                            overlap,
+                                            subtree_levels,
+                                            subtree_width,
+                                            root_slots: root_slots.map(RootSlots::from),
+                                        });
+                                    }
                                 }
                             }
                         }
@@ -321,6 +347,8 @@ struct BenchRecord {
     subtree_levels: Option<u32>,
     /// Treelet builders with subtrees: the subtree width in effect (`--subtree-width`).
     subtree_width: Option<u32>,
+    /// Treelet builders with phased rounds: how their roots take their slots (`--root-slots`).
+    root_slots: Option<&'static str>,
     /// GPU builders whose schedule was tuned (`--tune-schedule`): the tuning, whose kept
     /// schedule is the one in the schedule fields (these and `sort_tile_items`,
     /// `wide_level_dispatches`) and timed here.
@@ -648,6 +676,10 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
                 .treelet_settings()
                 .filter(|_| schedule.subtree_levels() > 0)
                 .map(|_| schedule.subtree_width(gpu.info.device_type)),
+            root_slots: builder
+                .treelet_settings()
+                .filter(|s| s.phases.is_some())
+                .map(|_| schedule.root_slots(gpu.info.device_type).name()),
             schedule_tuning: report.tuned.as_ref().map(TuningRecord::from),
             sort_tile_items,
             key_bits: builder.morton_key_bits(scene.triangles.len() as u32),

@@ -30,7 +30,7 @@ pub use dp::{
 pub use nodes_compact::NODES_COMPACT;
 pub use nodes_level::NODES_LEVEL;
 pub use nodes_mark::NODES_MARK;
-pub use phases::{MAX_PHASES, MIN_PHASES, ROOTS_PHASE};
+pub use phases::{RootSlots, MAX_PHASES, MIN_PHASES, ROOTS_PHASE};
 pub use subtrees_optimize::SUBTREES_OPTIMIZE;
 pub use treelets_climb::TREELETS_CLIMB;
 pub use treelets_optimize::TREELETS_OPTIMIZE;
@@ -413,7 +413,7 @@ impl TrbvhBuilder {
             presplit: None,
             rounds: TreeletRounds::new(ctx)?,
             waves: OverlappedRounds::new(),
-            phased: PhasedRounds::new(ctx),
+            phased: PhasedRounds::new(),
             collapse: Collapse::new(ctx)?,
             scratch: None,
             last_capacity: 0,

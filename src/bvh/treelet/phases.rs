@@ -10,6 +10,8 @@
 //! formation expands no leaf that deep: `treelet_dp.wgsl`), so the phase's treelets are
 //! disjoint. CPU twin: `WorkingTree::optimize_phased`.
 
+use std::sync::OnceLock;
+
 use super::rounds::{Round, RoundParams, TreeletRounds, TreeletState, SCHEDULE_ARGS};
 use crate::gpu::constants::MAX_LEVEL_DISPATCHES;
 use crate::gpu::{grow_storage_buffer, kernel, GpuContext, ItemCount, Kernel, Recorder};
@@ -25,21 +27,69 @@ pub const MAX_PHASES: u32 = 16;
 pub const MIN_PHASES: u32 = 3;
 const _: () = assert!(MAX_PHASES <= MAX_LEVEL_DISPATCHES);
 
+/// The pipeline-overridable constant that makes `roots_phase` take its roots' slots per
+/// workgroup (`override AGGREGATE_ROOTS` in roots_phase.wgsl): 1 for `RootSlots::Workgroup`.
+pub const AGGREGATE_ROOTS_OVERRIDE: &str = "AGGREGATE_ROOTS";
+
+/// How a phase's roots take their slots in its bucket (`roots_phase.wgsl`): the same roots, so the
+/// same tree, either way.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum RootSlots {
+    /// A workgroup counts its roots in workgroup memory and takes their slots with one device
+    /// atomic, between two workgroup barriers (the default on GPUs, where the roots of a phase,
+    /// thousands, would otherwise all add to one word).
+    Workgroup,
+    /// Each root takes its slot with a device atomic of its own, and the kernel has no barrier
+    /// (the default on CPU devices, which run a kernel with barriers as a coroutine of its SIMD
+    /// batches: lavapipe, conference's phased rounds, the 14 `roots_phase` dispatches 105-124 →
+    /// 58-64 ms).
+    Root,
+}
+
+impl RootSlots {
+    /// How many ways there are (`slots as usize` counts them from 0).
+    pub const WAYS: usize = 2;
+
+    pub fn name(self) -> &'static str {
+        match self {
+            RootSlots::Workgroup => "workgroup",
+            RootSlots::Root => "root",
+        }
+    }
+
+    /// The default on a device of type `device`.
+    pub fn default_for(device: wgpu::DeviceType) -> Self {
+        match device {
+            wgpu::DeviceType::Cpu => RootSlots::Root,
+            _ => RootSlots::Workgroup,
+        }
+    }
+}
+
 /// The kernel that finds a phase's roots (the treelets are `TreeletRounds`' kernels) and the
 /// depths its walks publish.
 pub(crate) struct PhasedRounds {
-    roots_phase: Kernel<RoundParams>,
+    /// `roots_phase` per `RootSlots`, compiled when first used.
+    roots_phase: [OnceLock<Kernel<RoundParams>>; RootSlots::WAYS],
     /// A word per leaf, stamped by the phase that published it (`roots_phase.wgsl`); grown on
     /// demand.
     depths: Option<wgpu::Buffer>,
 }
 
 impl PhasedRounds {
-    pub fn new(ctx: &GpuContext) -> Self {
+    pub fn new() -> Self {
         Self {
-            roots_phase: Kernel::new(ctx, &ROOTS_PHASE),
+            roots_phase: Default::default(),
             depths: None,
         }
+    }
+
+    /// `roots_phase` taking its roots' slots `slots`.
+    fn roots_phase(&self, ctx: &GpuContext, slots: RootSlots) -> &Kernel<RoundParams> {
+        self.roots_phase[slots as usize].get_or_init(|| {
+            let aggregate = f64::from(u8::from(slots == RootSlots::Workgroup));
+            Kernel::with_overrides(ctx, &ROOTS_PHASE, &[(AGGREGATE_ROOTS_OVERRIDE, aggregate)])
+        })
     }
 
     /// Grows the published depths for trees of up to `n` leaves.
@@ -63,7 +113,8 @@ impl PhasedRounds {
     ) {
         let ctx = rec.ctx;
         let n = count.capacity();
-        let grid = self.roots_phase.grid(ctx, n);
+        let roots_phase = self.roots_phase(ctx, rounds.schedule.root_slots(ctx.info.device_type));
+        let grid = roots_phase.grid(ctx, n);
         let optimize = rounds.optimize(ctx, round.treelet_size);
         let team_below = rounds.schedule.team_below();
         let limit = count.limit(ctx);
@@ -79,7 +130,7 @@ impl PhasedRounds {
         for k in 0..phases {
             let params = RoundParams::phase(n, grid.row_pitch, round, (phases, k), team_below);
             pass.dispatch(
-                &self.roots_phase,
+                roots_phase,
                 grid,
                 &params,
                 &[

@@ -37,6 +37,7 @@ use bytemuck::{Pod, Zeroable};
 use super::dp::{subsets_by_size, CostModel};
 use super::dp_unrolled::{TreeletDp, TREELET_DP_LOOP_OVERRIDE, TREELET_SIZE_OVERRIDE};
 use super::nodes_level::NODES_LEVEL;
+use super::phases::RootSlots;
 use super::subtrees_optimize::SUBTREES_OPTIMIZE;
 use super::treelets_climb::TREELETS_CLIMB;
 use super::treelets_optimize::TREELETS_OPTIMIZE;
@@ -301,6 +302,9 @@ pub struct RoundSchedule {
     /// spare), while `SUBTREE_LIST` fills the list (throughput: fewer idle lanes, each
     /// workgroup longer). None: `DEFAULT_SUBTREE_WIDTH` of the device type.
     pub subtree_width: Option<u32>,
+    /// How the phased rounds' roots take their slots in a phase's bucket (`RootSlots`; the
+    /// bottom-up rounds have no phases); None: `RootSlots::default_for` the device type.
+    pub root_slots: Option<RootSlots>,
 }
 
 impl RoundSchedule {
@@ -343,6 +347,12 @@ impl RoundSchedule {
         })
     }
 
+    /// How the phased rounds' roots take their slots on a device of type `device`.
+    pub fn root_slots(&self, device: wgpu::DeviceType) -> RootSlots {
+        self.root_slots
+            .unwrap_or_else(|| RootSlots::default_for(device))
+    }
+
     /// The team threshold in effect in the dispatched levels.
     pub fn team_below(&self) -> u32 {
         self.team_below.unwrap_or(DEFAULT_TEAM_BELOW)
@@ -364,7 +374,7 @@ impl RoundSchedule {
     }
 
     /// The options that are set, as `treelet bench` labels its runs ("d=14 t=1024 climb-t=4
-    /// dp=loop climb-dp=loop overlap=6 subtrees=6"; "default" when none is).
+    /// dp=loop climb-dp=loop overlap=6 subtrees=6 slots=root"; "default" when none is).
     pub fn label(&self) -> String {
         let mut parts = Vec::new();
         if let Some(levels) = self.level_dispatches {
@@ -390,6 +400,9 @@ impl RoundSchedule {
         }
         if let Some(width) = self.subtree_width {
             parts.push(format!("subtree-width={width}"));
+        }
+        if let Some(slots) = self.root_slots {
+            parts.push(format!("slots={}", slots.name()));
         }
         if parts.is_empty() {
             return "default".into();
