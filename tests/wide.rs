@@ -6,7 +6,7 @@
 //! collapses (greedy, the default, and SAH-optimal) are checked; the optimal one makes fewer
 //! nodes of a lower wide SAH, and a tree made on the CPU traces the same hits once uploaded. The
 //! path tracer follows the same paths through both layouts of a deep scene (its ray count and
-//! image brightness).
+//! image brightness). A tree deeper than a traversal's stack is an error, not a wrong hit.
 
 mod common;
 
@@ -710,4 +710,112 @@ fn the_gpu_fingerprint_equals_the_cpu_twin_and_ignores_wide_numbering() {
     let lbvh_fingerprint = TreeFingerprint::of(gpu(), &mut hasher, &lbvh).unwrap();
     assert_ne!(lbvh_fingerprint.binary, fingerprint.binary);
     assert_ne!(lbvh_fingerprint.wide, fingerprint.wide);
+}
+
+/// A comb of `levels` spine nodes over triangles in planes x = const that all cross the x axis:
+/// spine node i has the rest of the spine and a pair of far triangles (x ≥ 1000) as children,
+/// and the spine ends in the nearest triangle (x = 0, triangle 0). The spine's boxes are far
+/// larger than the pairs', so the greedy collapse makes wide nodes of seven pairs and the rest of
+/// the spine, all internal.
+fn comb(levels: u32) -> (Vec<Triangle>, Bvh) {
+    let plane = |x: f32| {
+        Triangle::new(
+            Vec3::new(x, -1.0, -1.0),
+            Vec3::new(x, 2.0, -1.0),
+            Vec3::new(x, -1.0, 2.0),
+            0,
+        )
+    };
+    let mut triangles = vec![plane(0.0)];
+    for i in 0..levels {
+        let x = 1000.0 + i as f32;
+        triangles.extend([plane(x), plane(x + 0.5)]);
+    }
+    let bounds = |t: u32| triangles[t as usize].bounds();
+    // Built from the end of the spine up, the root kept at node 0.
+    let mut nodes: Vec<BvhNode> = Vec::new();
+    let mut prim_indices = Vec::new();
+    let mut leaf = |nodes: &mut Vec<BvhNode>, t: u32| {
+        prim_indices.push(t);
+        nodes.push(BvhNode::leaf(bounds(t), prim_indices.len() as u32 - 1, 1));
+        nodes.len() as u32 - 1
+    };
+    // Reserve the root's slot so that it is node 0.
+    nodes.push(BvhNode::leaf(Aabb::EMPTY, 0, 0));
+    let mut rest = leaf(&mut nodes, 0);
+    let mut rest_bounds = bounds(0);
+    for i in (0..levels).rev() {
+        let (a, b) = (1 + 2 * i, 2 + 2 * i);
+        let left = leaf(&mut nodes, a);
+        let right = leaf(&mut nodes, b);
+        let pair_bounds = bounds(a).union(bounds(b));
+        nodes.push(BvhNode::internal(pair_bounds, left, right));
+        let pair = nodes.len() as u32 - 1;
+        rest_bounds = rest_bounds.union(pair_bounds);
+        if i == 0 {
+            nodes[0] = BvhNode::internal(rest_bounds, rest, pair);
+        } else {
+            nodes.push(BvhNode::internal(rest_bounds, rest, pair));
+            rest = nodes.len() as u32 - 1;
+        }
+    }
+    (
+        triangles,
+        Bvh {
+            nodes,
+            prim_indices,
+        },
+    )
+}
+
+/// A ray along the comb's spine meets the rest of the spine first at every node, so both
+/// traversals keep an entry per level (the far pair, or the group of seven pairs) on their
+/// stacks: a layout whose stack holds the comb (64 binary entries, 32 wide groups) traces the
+/// nearest triangle, and one whose stack it overflows reports the overflow as an error, not a
+/// wrong hit (40 spine levels: both hold it; 200: the binary stack overflows, the wide one, 30
+/// levels, holds it; 300: both overflow, 44 wide levels).
+#[test]
+fn traversal_stack_overflows_are_errors() {
+    let ray = [Ray::new(Vec3::new(-1.0, 0.0, 0.0), Vec3::X, 0.0, f32::MAX)];
+    for (levels, binary_overflows, wide_overflows) in
+        [(40, false, false), (200, true, false), (300, true, true)]
+    {
+        let (triangles, bvh) = comb(levels);
+        let scene = scene_of(triangles);
+        let geometry = Geometry::upload(gpu(), &scene).unwrap();
+        let mut tree = Tree::upload(gpu(), &bvh).unwrap();
+        convert_wide(&geometry, &mut tree, WideCollapse::Greedy);
+        let wide = tree.wide.as_ref().unwrap().download(gpu()).unwrap();
+        validate_wide(&wide, &scene.triangles).unwrap();
+        assert_eq!(
+            wide.levels() > 33,
+            wide_overflows,
+            "{} wide levels",
+            wide.levels()
+        );
+        for (layout, hits, overflows) in [
+            (
+                "binary",
+                closest_hits(gpu(), &geometry, &tree, &ray),
+                binary_overflows,
+            ),
+            (
+                "wide",
+                closest_hits_wide(gpu(), &geometry, &tree, &ray),
+                wide_overflows,
+            ),
+        ] {
+            match (hits, overflows) {
+                (Ok(hits), false) => {
+                    assert_eq!(hits[0].tri, 0, "{layout}, {levels} levels");
+                    assert!((hits[0].t - 1.0).abs() < 1e-6, "{layout}: {}", hits[0].t);
+                }
+                (Err(e), true) => assert!(
+                    e.to_string().contains("overflowed the traversal stack"),
+                    "{layout}: {e}"
+                ),
+                (result, _) => panic!("{layout}, {levels} levels: {result:?}"),
+            }
+        }
+    }
 }

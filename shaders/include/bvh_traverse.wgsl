@@ -25,6 +25,7 @@ fn intersect_leaf(first: u32, end: u32, test: RayTriangleTest, t_min: f32, best:
 // The subtrees still to visit: (node, bits of its entry distance) per entry. The caller declares
 // it once per invocation and passes it to every `traverse`: WGSL zero-fills every variable, so a
 // stack declared in `traverse` would be cleared on every call (512 bytes of private memory).
+const STACK_SIZE: u32 = 64u;
 alias TraversalStack = array<vec2<u32>, STACK_SIZE>;
 
 fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_zero: u32, any_hit: bool, stack: ptr<function, TraversalStack>) -> TraceResult {

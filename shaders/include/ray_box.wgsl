@@ -1,9 +1,8 @@
 // What both traversals share (binary: bvh_traverse.wgsl, wide: wide_traverse.wgsl): the ray as
-// the box test needs it, the robust slab test, the stack size and the result type.
+// the box test needs it, the robust slab test and the result type.
 #include "bvh_node.wgsl"
 #include "ray_triangle.wgsl"
 
-const STACK_SIZE: u32 = 64u;
 const NO_ENTRY: f32 = 3.0e38;
 
 // The ray as the box test needs it.

@@ -142,7 +142,12 @@ fn slab_test(near: vec3<u32>, far: vec3<u32>, scale: vec3<f32>, near_offset: vec
 
 // The node groups still to visit. The caller declares it once per invocation and passes it to
 // every `traverse`: WGSL zero-fills every variable, so a stack declared in `traverse` would be
-// cleared on every call (768 bytes of private memory).
+// cleared on every call. A traversal pushes at most one group per wide level below the root, and
+// the deepest wide trees of the shared scenes have 14 levels (conference, from a binary tree of
+// 42; 7-12 elsewhere), so 32 groups (384 bytes of private memory, zero-filled at each
+// invocation's start: on a GPU 24 16-byte stores to local memory, where 64 took 48) hold any
+// wide tree of up to 33 levels; a deeper one overflows, which the tracer reports as an error.
+const STACK_SIZE: u32 = 32u;
 alias TraversalStack = array<vec3<u32>, STACK_SIZE>;
 
 fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_zero: u32, any_hit: bool, stack: ptr<function, TraversalStack>) -> TraceResult {
