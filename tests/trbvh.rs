@@ -531,34 +531,19 @@ fn phased_rounds_equal_their_cpu_twin() {
         builder.settings = settings;
         let tree = builder.build_stages(gpu(), &geometry).unwrap();
         assert!(tree.lbvh == bottom_up.lbvh, "the same LBVH");
-        for schedule in [
-            RoundSchedule {
-                team_below: Some(u32::MAX),
+        let slots_and_teams = [RootSlots::Workgroup, RootSlots::Root]
+            .into_iter()
+            .flat_map(|slots| [(slots, None), (slots, Some(u32::MAX))])
+            .map(|(slots, team_below)| RoundSchedule {
+                root_slots: Some(slots),
+                team_below,
                 ..RoundSchedule::default()
-            },
-            RoundSchedule {
-                dp: Some(TreeletDp::Loop),
-                ..RoundSchedule::default()
-            },
-            RoundSchedule {
-                root_slots: Some(RootSlots::Workgroup),
-                ..RoundSchedule::default()
-            },
-            RoundSchedule {
-                root_slots: Some(RootSlots::Root),
-                ..RoundSchedule::default()
-            },
-            RoundSchedule {
-                root_slots: Some(RootSlots::Workgroup),
-                team_below: Some(u32::MAX),
-                ..RoundSchedule::default()
-            },
-            RoundSchedule {
-                root_slots: Some(RootSlots::Root),
-                team_below: Some(u32::MAX),
-                ..RoundSchedule::default()
-            },
-        ] {
+            });
+        let dp_loop = RoundSchedule {
+            dp: Some(TreeletDp::Loop),
+            ..RoundSchedule::default()
+        };
+        for schedule in slots_and_teams.chain([dp_loop]) {
             builder.set_schedule(schedule);
             let other = builder.build_stages(gpu(), &geometry).unwrap();
             assert!(other.working == tree.working, "{settings:?}, {schedule:?}");
