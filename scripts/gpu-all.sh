@@ -159,15 +159,16 @@ export -f teams
 # untuned; the whole build, its treelet stages and SAH; then 3 rounds of 6, 4 and 4 phases (the
 # preset `phased`, 14 phases; the later rounds' treelets with their leaves within 3 levels of
 # their roots, SAH -0.13 to +0.94 % with trbvh-split's) and 4 rounds of 5, 4, 4 and 4 (17, the
-# previous preset: -0.60 to +0.75 %). Then on two scenes 4 rounds of 7, and teams of 32 per treelet in phases below 2048
-# treelets and in every phase (the same tree): a phase holds thousands of treelets, where the
-# lone DP's throughput matters more than one treelet's latency.
+# previous preset: -0.60 to +0.75 %). Then on two scenes 4 rounds of 7, and teams of 32 per
+# treelet in phases below 2048 treelets and in every phase (the same tree): a phase holds
+# thousands of treelets, where the lone DP's throughput matters more than one treelet's latency.
 phases() {
   local scenes=${PHASE_SCENES:-conference crytek_sponza sibenik lost_empire field:224 field:707 field:2000}
   # In the order of what decides most, as the step's cap may stop it: the bottom-up rounds
   # (phases 0) against the preset on every scene; teams in the preset's phases; the roots' slots
-  # per workgroup (the GPU default) against per root; every dispatch of the preset timed (roots_phase against treelets_optimize, phase by phase); then the previous
-  # preset, 7, 7, 7 and 14, 7, 7.
+  # per workgroup (the GPU default) against per root; every dispatch of the preset timed
+  # (roots_phase against treelets_optimize, phase by phase); then the previous preset, 7, 7, 7
+  # and 14, 7, 7.
   for s in $scenes; do
     timeout 30 $TREELET bench --scene $s --builder trbvh,trbvh-split --preset phased --phases 0,4 \
       --tune-schedule off $small >> $res/phases.jsonl

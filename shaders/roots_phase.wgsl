@@ -17,8 +17,8 @@
 // (`atomicMax`: the schedule is zero at the round's start), so no workgroup waits for the others
 // and none finishes the phase. On GPUs a workgroup takes its roots' slots with one device atomic
 // (`AGGREGATE_ROOTS`, two workgroup barriers); a CPU device takes one per root, as a kernel with
-// barriers runs there as a coroutine of its SIMD batches (lavapipe: 8.4 → 2.6 ms per dispatch
-// over conference's nodes without them).
+// barriers runs there as a coroutine of its SIMD batches (lavapipe, conference: about 8 → 5 ms
+// per dispatch).
 #include "treelet_round.wgsl"
 
 const WORKGROUP: u32 = 256u;
@@ -45,8 +45,8 @@ var<workgroup> workgroup_roots: atomic<u32>;
 var<workgroup> workgroup_first: u32;
 
 // Raises the phase's treelets_optimize arguments to cover `treelets` treelets
-// (`optimize_workgroups`, in rows of at most MAX_WORKGROUPS_X as `dispatch_args` makes them).
-// The arguments end as the most that any count raised them to, which covers the final count: a
+// (`optimize_workgroups`, in rows of at most MAX_WORKGROUPS_X: x the fewer of the workgroups and
+// that, y the rows; treelets_optimize numbers a workgroup wid.x + wid.y · x). The arguments end as the most that any count raised them to, which covers the final count: a
 // dispatch of teams that turns lone past params.team_below keeps the teams' larger grid, whose
 // extra workgroups find no treelet.
 fn raise_arguments(treelets: u32) {
