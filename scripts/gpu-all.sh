@@ -208,9 +208,11 @@ step tests 150 bash -c tests
 kernel_stats() {
   xz -dc .gpu/shader-stats.xz > $work/shader-stats && chmod +x $work/shader-stats
   $work/shader-stats
-  # The default schedules' treelet pipelines: without the team path; the trace of a scene
-  # without point lights (every shared scene); trbvh's collapse (no pre-split references).
+  # The default schedules' treelet pipelines: without the team path, then also without the next
+  # round's levels (the phased rounds, a last round); the trace of a scene without point lights
+  # (every shared scene); trbvh's collapse (no pre-split references).
   $work/shader-stats treelets waves TREELET_TEAMS=0
+  $work/shader-stats treelets_optimize treelets_climb TREELET_TEAMS=0 NEXT_LEVELS=0
   $work/shader-stats paths_trace POINT_LIGHTS=0
   $work/shader-stats nodes_mark HAS_REFS=0
   $work/shader-stats treelets waves subtrees TREELET_SIZE=8

@@ -23,8 +23,9 @@ cargo run --release --example build_bvh
 # Every kernel compiles with a GPU driver's compiler too (RADV with a null device; README, "Kernel
 # statistics"), and there none spills a vector register (treelets of 7 leaves; the wide
 # conversion's kernels with each collapse, the trace kernels without point lights, the
-# collapse's mark without references, the any-hit ray queries and the phases' roots taking
-# their slots one by one: pipeline constants).
+# collapse's mark without references, the any-hit ray queries, the phases' roots taking their
+# slots one by one and the treelet kernels without the team path and the next round's levels:
+# pipeline constants).
 if [ -f /usr/share/vulkan/icd.d/radeon_icd.json ]; then
   bash scripts/shader-stats.sh > target/shader-stats.txt
   bash scripts/shader-stats.sh wide_nodes WIDE_COLLAPSE=1 >> target/shader-stats.txt
@@ -32,6 +33,7 @@ if [ -f /usr/share/vulkan/icd.d/radeon_icd.json ]; then
   bash scripts/shader-stats.sh nodes_mark HAS_REFS=0 >> target/shader-stats.txt
   bash scripts/shader-stats.sh rays_intersect ANY_HIT=1 >> target/shader-stats.txt
   bash scripts/shader-stats.sh roots_phase AGGREGATE_ROOTS=0 >> target/shader-stats.txt
+  bash scripts/shader-stats.sh treelets waves subtrees TREELET_TEAMS=0 NEXT_LEVELS=0 >> target/shader-stats.txt
   if grep -E "Spilled VGPRs=[1-9]" target/shader-stats.txt; then
     echo "error: the kernels above spill registers on RADV (target/shader-stats.txt)"
     exit 1

@@ -41,6 +41,16 @@ override TREELET_SIZE: u32;
 // (`bvh::treelet::dp_unrolled` reads it when it generates the include; the code has no use
 // for it).
 override TREELET_DP_LOOP: u32 = 0u;
+// 1: step 5 is compiled in (a round with a next round: params.next_gamma); 0: a pipeline for the
+// treelets of a last round, of the phased rounds and of the overlapped rounds' waves, which holds
+// no code for the next round's levels (RADV, treelets_optimize: 240 → 216 registers).
+override NEXT_LEVELS: u32 = 1u;
+
+// Whether the treelets compute the next round's levels (step 5). The pipeline is chosen by the same
+// test of the round's next γ (`TreeletKernels::get`), so the two agree.
+fn has_next_round() -> bool {
+    return NEXT_LEVELS != 0u && params.next_gamma != NO_NEXT_ROUND;
+}
 
 // Subsets 1 ..= 2^MAX_TREELET - 2 (the full set is never stored).
 const DP_SLOTS: u32 = (1u << MAX_TREELET) - 2u;
@@ -183,7 +193,7 @@ fn form_treelet(root: u32) -> f32 {
     take_leaf(1u, r.right_or_count, 1u < max_depth);
     // Loaded with the first leaves, so that a treelet that keeps its topology stores its root's
     // next level without a round trip to memory after the DP.
-    if params.next_gamma != NO_NEXT_ROUND {
+    if has_next_round() {
         root_child_levels = vec2<u32>(
             select(0u, next_levels[r.left_or_first], leaf_prims[0] >= params.next_gamma),
             select(0u, next_levels[r.right_or_count], leaf_prims[1] >= params.next_gamma),
@@ -257,7 +267,7 @@ fn child_code(part: u32, queued: u32) -> u32 {
 // write-back writes no level of a leaf). Zeros without a next round.
 fn leaf_next_levels() -> array<u32, MAX_TREELET> {
     var levels: array<u32, MAX_TREELET>;
-    if params.next_gamma != NO_NEXT_ROUND {
+    if has_next_round() {
         for (var i = 0u; i < MAX_TREELET; i++) {
             let is_root = i < TREELET_SIZE && leaf_prims[i] >= params.next_gamma;
             levels[i] = select(0u, next_levels[leaf_node[min(i, TREELET_SIZE - 1u)]], is_root);
@@ -271,7 +281,7 @@ fn leaf_next_levels() -> array<u32, MAX_TREELET> {
 // is read back. Nothing without a next round (its levels would all be 0, and nothing reads them:
 // the last round, the overlapped and the phased rounds).
 fn store_next_levels(queue: ptr<function, WriteQueue>, leaf_levels: array<u32, MAX_TREELET>) {
-    if params.next_gamma == NO_NEXT_ROUND {
+    if !has_next_round() {
         return;
     }
     var level_of: array<u32, 2u * MAX_TREELET>;
@@ -293,7 +303,7 @@ fn store_next_levels(queue: ptr<function, WriteQueue>, leaf_levels: array<u32, M
 // Step 5 when the treelet keeps its topology: only the root is new to finish (its children were
 // finished before it). Nothing without a next round.
 fn store_root_next_level(root: u32) {
-    if params.next_gamma == NO_NEXT_ROUND {
+    if !has_next_round() {
         return;
     }
     var level = 0u;

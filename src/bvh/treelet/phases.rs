@@ -115,7 +115,8 @@ impl PhasedRounds {
         let n = count.capacity();
         let roots_phase = self.roots_phase(ctx, rounds.schedule.root_slots(ctx.info.device_type));
         let grid = roots_phase.grid(ctx, n);
-        let optimize = rounds.optimize(ctx, round.treelet_size);
+        // The phases compute no next levels (`RoundParams::phase`).
+        let optimize = rounds.optimize(ctx, round.treelet_size, u32::MAX);
         let team_below = rounds.schedule.team_below();
         let limit = count.limit(ctx);
         let roots = rounds.roots();

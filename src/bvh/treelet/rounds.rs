@@ -449,16 +449,26 @@ const TREELET_SIZES: usize = (MAX_TREELET_SIZE - MIN_TREELET_SIZE + 1) as usize;
 /// scalar register spilled instead of 30; README, "Kernel statistics").
 pub const TREELET_TEAMS_OVERRIDE: &str = "TREELET_TEAMS";
 
+/// The pipeline-overridable constant that gives a treelet kernel the code for the next round's
+/// levels (`override NEXT_LEVELS` in treelet_dp.wgsl, step 5): 1 for the treelets of a round with
+/// a next round, 0 for a last round's, the phased rounds' and the overlapped rounds' (RADV:
+/// `treelets_optimize` 240 → 216 registers, 37,708 → 35,416 bytes of code).
+pub const NEXT_LEVELS_OVERRIDE: &str = "NEXT_LEVELS";
+
 /// Treelet kernels compiled when first used, one per treelet size from MIN_TREELET_SIZE, DP form
-/// (`dp as usize`) and, for a kernel with a team path, whether it has it: the WGSL overrides
-/// `TREELET_SIZE` and `TREELET_DP_LOOP` select the generated DP (`dp_unrolled`),
-/// `TREELET_TEAMS` the team path.
+/// (`dp as usize`), for a kernel with a team path whether it has it, and whether it computes the
+/// next round's levels: the WGSL overrides `TREELET_SIZE` and `TREELET_DP_LOOP` select the
+/// generated DP (`dp_unrolled`), `TREELET_TEAMS` the team path, `NEXT_LEVELS` step 5.
 pub(crate) struct TreeletKernels {
     decl: &'static KernelDecl<RoundParams>,
     /// Whether the kernel includes treelet_team.wgsl (and so declares `TREELET_TEAMS`).
     has_teams: bool,
-    compiled: [[[OnceLock<Kernel<RoundParams>>; 2]; TreeletDp::FORMS]; TREELET_SIZES],
+    compiled: [[TreeletVariants; TreeletDp::FORMS]; TREELET_SIZES],
 }
+
+/// One treelet size's and DP form's kernels: without and with the team path, each without and
+/// with the next round's levels.
+type TreeletVariants = [[OnceLock<Kernel<RoundParams>>; 2]; 2];
 
 /// The line by which a treelet kernel takes the team path (and its override).
 const TEAM_INCLUDE: &str = "#include \"treelet_team.wgsl\"";
@@ -473,19 +483,23 @@ impl TreeletKernels {
     }
 
     /// The kernel for treelets of `treelet_size` leaves and this DP form, dispatched with the
-    /// team threshold `team_below` (`RoundParams::team_below`): with the team path only where
-    /// the threshold can send a treelet to it.
+    /// team threshold `team_below` (`RoundParams::team_below`) and the next round's smallest
+    /// root `next_gamma` (`RoundParams::next_gamma`; u32::MAX: none): with the team path only
+    /// where the threshold can send a treelet to it, and the next round's levels only where there
+    /// is one.
     pub(crate) fn get(
         &self,
         ctx: &GpuContext,
         treelet_size: u32,
         dp: TreeletDp,
         team_below: u32,
+        next_gamma: u32,
     ) -> &Kernel<RoundParams> {
         let team_path = self.team_path(team_below);
+        let next_levels = next_gamma != u32::MAX;
         let slot = &self.compiled[(treelet_size - MIN_TREELET_SIZE) as usize][dp as usize];
-        slot[usize::from(team_path)].get_or_init(|| {
-            let overrides = self.overrides(treelet_size, dp, team_path);
+        slot[usize::from(team_path)][usize::from(next_levels)].get_or_init(|| {
+            let overrides = self.overrides(treelet_size, dp, team_path, next_levels);
             Kernel::with_overrides(ctx, self.decl, &overrides)
         })
     }
@@ -502,10 +516,12 @@ impl TreeletKernels {
         treelet_size: u32,
         dp: TreeletDp,
         team_path: bool,
+        next_levels: bool,
     ) -> Vec<(&'static str, f64)> {
         let mut overrides = vec![
             (TREELET_SIZE_OVERRIDE, f64::from(treelet_size)),
             (TREELET_DP_LOOP_OVERRIDE, dp.override_value()),
+            (NEXT_LEVELS_OVERRIDE, f64::from(u8::from(next_levels))),
         ];
         if self.has_teams {
             overrides.push((TREELET_TEAMS_OVERRIDE, f64::from(u8::from(team_path))));
@@ -606,7 +622,7 @@ impl TreeletRounds {
         if round.gamma == u32::MAX {
             return;
         }
-        let optimize = self.optimize(ctx, round.treelet_size);
+        let optimize = self.optimize(ctx, round.treelet_size, round.next_gamma);
         let treelet_buffers = self.treelet_buffers(state);
         // The GPU's u32 sum wraps; truncating the exact sum gives the same word.
         let first_slot = |level: u32| level_start(n, round.gamma, level) as u32;
@@ -621,9 +637,13 @@ impl TreeletRounds {
                 // The levels up to subtree_levels: a workgroup per few cut roots (level 1's
                 // arguments count them all); the treelet buffers but the teams' subsets.
                 // No team path there: its threshold does not apply.
-                let subtrees = self
-                    .subtrees
-                    .get(ctx, round.treelet_size, self.schedule.dp(), 0);
+                let subtrees = self.subtrees.get(
+                    ctx,
+                    round.treelet_size,
+                    self.schedule.dp(),
+                    0,
+                    round.next_gamma,
+                );
                 let subtree_buffers = [&treelet_buffers[..6], &[state.next_levels]].concat();
                 pass.dispatch_indirect(subtrees, state.schedule, args, &params, &subtree_buffers);
             }
@@ -637,6 +657,7 @@ impl TreeletRounds {
             round.treelet_size,
             self.schedule.climb_dp(),
             params.team_below,
+            round.next_gamma,
         );
         rec.pass("treelets climb")
             .dispatch(climb, Grid::workgroups(1, 1), &params, &climb_buffers);
@@ -658,11 +679,22 @@ impl TreeletRounds {
     }
 
     /// `treelets_optimize` for treelets of `treelet_size` leaves, with the DP form and the team
-    /// threshold of the dispatched levels (and phases).
-    pub(crate) fn optimize(&self, ctx: &GpuContext, treelet_size: u32) -> &Kernel<RoundParams> {
+    /// threshold of the dispatched levels (and phases), for a round whose next round's smallest
+    /// root is `next_gamma` (u32::MAX: none).
+    pub(crate) fn optimize(
+        &self,
+        ctx: &GpuContext,
+        treelet_size: u32,
+        next_gamma: u32,
+    ) -> &Kernel<RoundParams> {
         let team_below = self.schedule.team_below();
-        self.optimize
-            .get(ctx, treelet_size, self.schedule.dp(), team_below)
+        self.optimize.get(
+            ctx,
+            treelet_size,
+            self.schedule.dp(),
+            team_below,
+            next_gamma,
+        )
     }
 
     /// `subsets_by_size`, which the teams read.
@@ -885,7 +917,7 @@ mod tests {
         use crate::gpu::shader_source;
         let teams = |kernels: &TreeletKernels, team_below: u32| {
             kernels
-                .overrides(7, TreeletDp::Unrolled, kernels.team_path(team_below))
+                .overrides(7, TreeletDp::Unrolled, kernels.team_path(team_below), true)
                 .iter()
                 .find(|(name, _)| *name == TREELET_TEAMS_OVERRIDE)
                 .map(|&(_, value)| value)

@@ -40,6 +40,11 @@ pub fn overlap_reach(treelet_size: u32) -> u32 {
 
 /// Words of the wave state (`treelet_waves.wgsl`): counts, tickets, the stop flag.
 const WAVE_STATE_WORDS: u64 = 6;
+
+/// The waves' next γ: none, as the waves of all rounds compute no next levels
+/// (`RoundParams::waves`).
+const NO_NEXT_LEVELS: u32 = u32::MAX;
+
 /// Where the wave state holds the count of odd waves' candidates (`CANDIDATE_COUNT + 1` in
 /// `treelet_waves.wgsl`).
 const ODD_CANDIDATES_WORD: u64 = 2;
@@ -187,9 +192,13 @@ impl OverlappedRounds {
         let mut climb_buffers = climb_buffers.to_vec();
         climb_buffers.push(subsets);
         let find = self.find.get_or_init(|| Kernel::new(ctx, &WAVES_FIND));
-        let optimize = self
-            .optimize
-            .get(ctx, overlap.treelet_size, overlap.dp, overlap.team_below);
+        let optimize = self.optimize.get(
+            ctx,
+            overlap.treelet_size,
+            overlap.dp,
+            overlap.team_below,
+            NO_NEXT_LEVELS,
+        );
         let mut pass = rec.pass("treelets");
         for wave in 1..=overlap.dispatched {
             let params = params(wave);
@@ -202,6 +211,7 @@ impl OverlappedRounds {
             overlap.treelet_size,
             overlap.climb_dp,
             overlap.climb_team_below,
+            NO_NEXT_LEVELS,
         );
         rec.pass("treelets climb").dispatch(
             climb,
