@@ -945,4 +945,38 @@ mod tests {
             !shader_source(SUBTREES_OPTIMIZE.info.source, &[]).contains("override TREELET_TEAMS")
         );
     }
+
+    /// Every treelet kernel declares `NEXT_LEVELS` (through treelet_dp.wgsl) and gets it set: 1
+    /// for a round with a next round, 0 for one without (`TreeletKernels::get`'s next γ).
+    #[test]
+    fn next_levels_only_with_a_next_round() {
+        use super::{TreeletKernels, NEXT_LEVELS_OVERRIDE};
+        use crate::bvh::treelet::{
+            SUBTREES_OPTIMIZE, TREELETS_CLIMB, TREELETS_OPTIMIZE, WAVES_CLIMB, WAVES_OPTIMIZE,
+        };
+        use crate::gpu::shader_source;
+        for decl in [
+            &TREELETS_OPTIMIZE,
+            &TREELETS_CLIMB,
+            &SUBTREES_OPTIMIZE,
+            &WAVES_OPTIMIZE,
+            &WAVES_CLIMB,
+        ] {
+            let kernels = TreeletKernels::new(decl);
+            for (next_levels, value) in [(false, 0.0), (true, 1.0)] {
+                let overrides = kernels.overrides(7, TreeletDp::Unrolled, false, next_levels);
+                assert!(
+                    overrides.contains(&(NEXT_LEVELS_OVERRIDE, value)),
+                    "{}",
+                    decl.info.name
+                );
+            }
+            let source = shader_source(decl.info.source, &[]);
+            assert!(
+                source.contains("override NEXT_LEVELS"),
+                "{}",
+                decl.info.name
+            );
+        }
+    }
 }
