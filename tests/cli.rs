@@ -428,6 +428,58 @@ fn bench_round_overlap_reports_each_reach() {
     );
 }
 
+/// `bench --tune-schedule on` tunes the phased rounds' own schedule: their team threshold, DP
+/// form and root slots (and the sort tile), never a dimension of the bottom-up rounds; no trial
+/// builds another tree, and the record reports the root slots kept.
+#[test]
+fn bench_tunes_the_phased_rounds() {
+    let records = quick_bench(
+        "trbvh",
+        &[
+            "--preset",
+            "phased",
+            "--tune-schedule",
+            "on",
+            "--tune-pairs",
+            "1",
+        ],
+    );
+    let record = &records[0];
+    let trials = record["schedule_tuning"]["trials"].as_array().unwrap();
+    // The team thresholds (3), the other DP form, the other root slots and the sort tiles (2).
+    assert!(trials.len() >= 7, "{trials:?}");
+    let schedules: Vec<&str> = trials
+        .iter()
+        .map(|t| t["schedule"].as_str().unwrap())
+        .collect();
+    for (trial, schedule) in trials.iter().zip(&schedules) {
+        assert_eq!(trial["other_tree"], false, "{trial}");
+        for part in ["overlap", "subtrees", "d=", "climb"] {
+            assert!(!schedule.contains(part), "{schedule}");
+        }
+    }
+    for part in ["t=", "dp=loop", "slots="] {
+        assert!(schedules.iter().any(|s| s.contains(part)), "{schedules:?}");
+    }
+    let kept = trials
+        .iter()
+        .rev()
+        .find(|t| t["adopted"] == true)
+        .map_or("default", |t| t["schedule"].as_str().unwrap());
+    let slots = kept.split(' ').find_map(|p| p.strip_prefix("slots="));
+    let default = if record["device_type"] == "Cpu" {
+        "root"
+    } else {
+        "workgroup"
+    };
+    assert_eq!(
+        record["root_slots"],
+        slots.unwrap_or(default),
+        "{kept} {record}"
+    );
+    assert_eq!(record["valid"], true);
+}
+
 /// `bench --tune-schedule on` tunes lbvh's and trbvh's build schedules from the one given
 /// (`--round-overlap none` stays as given): every trial is listed with both medians, no schedule
 /// built another tree, lbvh tries sort tiles alone, the schedule reported is the last one kept

@@ -1,7 +1,8 @@
 //! Build-schedule tuning. A build's schedule (`BuildSchedule`: the treelet rounds' —
 //! `RoundSchedule`: the rounds one after another, overlapped or with their lowest levels per
 //! subtree, the lone DP's form in the dispatched levels and in the climb, the team thresholds of
-//! both, the levels given a dispatch — the radix sort's tile and the wide conversion's level
+//! both, the levels given a dispatch; for the phased rounds the DP's form, the team threshold and
+//! how a phase's roots take their slots — the radix sort's tile and the wide conversion's level
 //! dispatches) never changes the tree (tests), so it
 //! sets only the build's time, and which one is fastest depends on the device and the tree.
 //! `tune_schedule` finds it where the build runs: a coordinate descent from a starting schedule
@@ -17,7 +18,7 @@
 use std::time::Instant;
 
 use super::fingerprint::{TreeFingerprint, WordsHasher};
-use super::treelet::{RoundSchedule, TreeletDp, MAX_LEVEL_DISPATCHES};
+use super::treelet::{RootSlots, RoundSchedule, TreeletDp, MAX_LEVEL_DISPATCHES};
 use super::wide::MAX_WIDE_LEVEL_DISPATCHES;
 use super::TreeUpdater;
 use crate::device::{Geometry, Tree};
@@ -85,11 +86,17 @@ impl BuildSchedule {
 }
 
 /// The dimensions that apply to an updater's builds, with the device's defaults for the tree
-/// (`TreeUpdater::tuning_space`): the treelet rounds' level dispatches (treelet builders), the
-/// sort tile (every GPU builder), the wide conversion's level dispatches (wide layout).
+/// (`TreeUpdater::tuning_space`): the treelet rounds' level dispatches (treelet builders with
+/// bottom-up rounds), the phased rounds (treelet builders with phases), the sort tile (every GPU
+/// builder), the wide conversion's level dispatches (wide layout).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TuningSpace {
     pub round_levels: Option<u32>,
+    /// The builds' treelet rounds are phased (`TreeletSettings::phases`): no levels, no climb, no
+    /// overlap and no subtrees, but the phases' DP form, team threshold and root slots.
+    pub phased: bool,
+    /// The device's way of taking a phase's root slots (`RoundSchedule::root_slots` unset).
+    pub root_slots: RootSlots,
     /// The rounds' default level dispatches differ (on CPU devices they depend on each round's
     /// γ): `round_levels` is round 1's, and a count equal to it is not the default in effect.
     pub round_levels_vary: bool,
@@ -114,6 +121,7 @@ pub struct SchedulePins {
     pub team_below: bool,
     pub climb_team_below: bool,
     pub level_dispatches: bool,
+    pub root_slots: bool,
     pub sort_tile_items: bool,
     pub wide_level_dispatches: bool,
 }
@@ -190,6 +198,7 @@ enum Dimension {
     TeamBelow,
     ClimbTeamBelow,
     LevelDispatches,
+    RootSlots,
     SortTile,
     WideLevels,
 }
@@ -197,7 +206,7 @@ enum Dimension {
 impl Dimension {
     /// In the order a descent tries them: the dispatched levels' teams first, with the rounds one
     /// after another (the default), then the overlap (its dispatched waves take the kept teams).
-    const ALL: [Dimension; 10] = [
+    const ALL: [Dimension; 11] = [
         Dimension::TeamBelow,
         Dimension::Overlap,
         Dimension::Subtrees,
@@ -206,6 +215,7 @@ impl Dimension {
         Dimension::ClimbDp,
         Dimension::ClimbTeamBelow,
         Dimension::LevelDispatches,
+        Dimension::RootSlots,
         Dimension::SortTile,
         Dimension::WideLevels,
     ];
@@ -220,6 +230,7 @@ impl Dimension {
             Dimension::TeamBelow => pins.team_below,
             Dimension::ClimbTeamBelow => pins.climb_team_below,
             Dimension::LevelDispatches => pins.level_dispatches,
+            Dimension::RootSlots => pins.root_slots,
             Dimension::SortTile => pins.sort_tile_items,
             Dimension::WideLevels => pins.wide_level_dispatches,
         }
@@ -231,6 +242,9 @@ impl Dimension {
             Dimension::WideLevels => space.wide_levels.is_some(),
             // Rounds of more than one treelet size cannot overlap.
             Dimension::Overlap => space.round_levels.is_some() && space.overlap_reach > 0,
+            // The phases' treelets take a DP form and a team threshold as a level's do.
+            Dimension::TeamBelow | Dimension::Dp => space.round_levels.is_some() || space.phased,
+            Dimension::RootSlots => space.phased,
             _ => space.round_levels.is_some(),
         }
     }
@@ -283,12 +297,17 @@ impl Dimension {
                     })
                 })
                 .to_vec(),
-            // The climb keeps its form (by default it follows the dispatched levels').
+            // The climb keeps its form (by default it follows the dispatched levels'); the phased
+            // rounds have no climb.
             Dimension::Dp => [TreeletDp::Unrolled, TreeletDp::Loop]
                 .map(|dp| {
                     rounds(RoundSchedule {
                         dp: Some(dp),
-                        climb_dp: Some(k.climb_dp()),
+                        climb_dp: if space.phased {
+                            k.climb_dp
+                        } else {
+                            Some(k.climb_dp())
+                        },
                         ..k
                     })
                 })
@@ -329,6 +348,14 @@ impl Dimension {
                 })
             })
             .collect(),
+            Dimension::RootSlots => [RootSlots::Workgroup, RootSlots::Root]
+                .map(|slots| {
+                    rounds(RoundSchedule {
+                        root_slots: Some(slots),
+                        ..k
+                    })
+                })
+                .to_vec(),
             Dimension::SortTile => std::iter::once(None)
                 .chain(SORT_TILE_ITEMS.map(Some))
                 .map(|sort_tile_items| BuildSchedule {
@@ -380,6 +407,10 @@ impl Dimension {
                 rb.level_dispatches,
                 space.round_levels.unwrap_or(0),
             ),
+            Dimension::RootSlots => {
+                ra.root_slots.unwrap_or(space.root_slots)
+                    == rb.root_slots.unwrap_or(space.root_slots)
+            }
             Dimension::SortTile => {
                 same_count(a.sort_tile_items, b.sort_tile_items, space.sort_tile_items)
             }
@@ -431,14 +462,13 @@ fn without_defaults(schedule: BuildSchedule, space: &TuningSpace) -> BuildSchedu
                 .climb_team_below
                 .filter(|&t| t != RoundSchedule::default().climb_team_below()),
             dp: r.dp.filter(|&dp| dp != TreeletDp::default()),
-            climb_dp: r.climb_dp.filter(|&dp| dp != r.dp()),
+            climb_dp: r.climb_dp.filter(|&dp| !space.phased && dp != r.dp()),
             overlap: r.overlap,
             subtree_levels: r.subtree_levels.filter(|&levels| levels != 0),
             subtree_width: r
                 .subtree_width
                 .filter(|&w| r.subtree_levels() > 0 && w != space.subtree_width),
-            // Not tuned: as the starting schedule has it.
-            root_slots: r.root_slots,
+            root_slots: r.root_slots.filter(|&slots| slots != space.root_slots),
         },
         sort_tile_items: schedule
             .sort_tile_items
@@ -711,6 +741,8 @@ mod tests {
     /// tile) and 20 (wide level dispatches).
     const SPACE: TuningSpace = TuningSpace {
         round_levels: Some(14),
+        phased: false,
+        root_slots: RootSlots::Workgroup,
         round_levels_vary: false,
         overlap_reach: 6,
         subtree_width: 64,
@@ -720,11 +752,14 @@ mod tests {
 
     /// A build time with one best value per dimension: overlap 6 (else subtrees of 6 levels, of
     /// width 128), the loop DP in the climb, teams below 1024 (in the climb below 5), 11
-    /// dispatched levels, tiles of 16
-    /// keys per invocation, 14 wide levels dispatched.
+    /// dispatched levels, a phase's root slots taken per root, tiles of 16 keys per invocation,
+    /// 14 wide levels dispatched.
     fn cost(b: BuildSchedule) -> f64 {
         let s = b.rounds;
         let mut ms = 10.0;
+        if s.root_slots == Some(RootSlots::Root) {
+            ms -= 0.4;
+        }
         if s.overlap.is_none() {
             ms += 3.0;
         }
@@ -818,11 +853,57 @@ mod tests {
         assert_eq!(tuned.builds as usize, timed.len() + tuned.trials.len());
     }
 
+    /// Phased rounds: their team threshold, DP form and root slots are tried, and none of the
+    /// bottom-up rounds' own dimensions (overlap, subtrees, the climb's, level dispatches).
+    #[test]
+    fn the_phased_rounds_tune_their_own_dimensions() {
+        let space = TuningSpace {
+            round_levels: None,
+            phased: true,
+            overlap_reach: 0,
+            ..SPACE
+        };
+        let (tuned, timed) = tune(
+            |_| false,
+            SchedulePins::default(),
+            BuildSchedule::default(),
+            &space,
+        );
+        assert!(timed.iter().all(|s| {
+            let r = s.rounds;
+            r.overlap.is_none()
+                && r.subtree_levels.is_none()
+                && r.subtree_width.is_none()
+                && r.climb_dp.is_none()
+                && r.climb_team_below.is_none()
+                && r.level_dispatches.is_none()
+        }));
+        assert!(timed.iter().any(|s| s.rounds.dp == Some(TreeletDp::Loop)));
+        let kept = tuned.schedule.rounds;
+        assert_eq!(kept.team_below(), 1024);
+        assert_eq!(kept.root_slots, Some(RootSlots::Root));
+        // `cost` rewards the loop form in the climb, whose form follows the DP's where unset: so
+        // the loop DP is kept here, labelled without a climb's form.
+        assert_eq!(kept.dp(), TreeletDp::Loop);
+        assert_eq!(kept.climb_dp, None);
+        // The device's own way is the default, so it is not kept as a setting.
+        let start = BuildSchedule {
+            rounds: RoundSchedule {
+                root_slots: Some(RootSlots::Workgroup),
+                ..RoundSchedule::default()
+            },
+            ..BuildSchedule::default()
+        };
+        assert_eq!(without_defaults(start, &space), BuildSchedule::default());
+    }
+
     #[test]
     fn only_the_dimensions_of_the_space_are_tried() {
         // An LBVH in the binary layout: the sort tile alone.
         let space = TuningSpace {
             round_levels: None,
+            phased: false,
+            root_slots: RootSlots::Workgroup,
             round_levels_vary: false,
             overlap_reach: 0,
             subtree_width: 64,

@@ -260,8 +260,9 @@ impl TreeUpdater {
         let device = ctx.info.device_type;
         // The stages' sizes (the references of pre-splitting where the builder splits) and the
         // treelet rounds' level dispatches (none for the phased rounds).
+        let phased = matches!(&self.producer, Producer::Trbvh(b) if b.settings.phases.is_some());
         let (prims, round_levels, round_levels_vary, overlap_reach) = match &self.producer {
-            // The phased rounds take no level schedule: only the stages' sizes apply.
+            // The phased rounds take no level schedule (their own dimensions: `phased`).
             Producer::Trbvh(b) if b.settings.phases.is_some() => {
                 (b.leaf_capacity(triangles), None, false, 0)
             }
@@ -285,6 +286,8 @@ impl TreeUpdater {
         };
         Some(TuningSpace {
             round_levels,
+            phased,
+            root_slots: RoundSchedule::default().root_slots(device),
             round_levels_vary,
             overlap_reach,
             subtree_width: RoundSchedule::default().subtree_width(device),

@@ -105,7 +105,7 @@ pub struct BenchArgs {
     /// How the phased rounds' roots take their slots in a phase's bucket: workgroup (one device
     /// atomic per workgroup, between two workgroup barriers; the default on GPUs) or root (one per
     /// root, no barrier; the default on CPU devices); trbvh, trbvh-split with --phases or the
-    /// phased preset; a comma-separated list to compare. Not tuned. The tree is the same for both
+    /// phased preset; a comma-separated list to compare. The tree is the same for both
     #[arg(long, value_delimiter = ',', value_enum)]
     root_slots: Vec<RootSlotsArg>,
     /// Tune the build schedule on this device and scene after the warm-up and before the timed
@@ -270,6 +270,7 @@ impl BenchArgs {
             team_below: !self.team_below.is_empty(),
             climb_team_below: !self.climb_team_below.is_empty(),
             level_dispatches: !self.level_dispatches.is_empty(),
+            root_slots: !self.root_slots.is_empty(),
             sort_tile_items: self.sort_tile_items.is_some(),
             wide_level_dispatches: !self.wide_level_dispatches.is_empty(),
         };
