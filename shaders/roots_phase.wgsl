@@ -45,16 +45,16 @@ var<workgroup> workgroup_roots: atomic<u32>;
 var<workgroup> workgroup_first: u32;
 
 // Raises the phase's treelets_optimize arguments to cover `treelets` treelets
-// (`optimize_workgroups`, in rows of at most MAX_WORKGROUPS_X: x the fewer of the workgroups and
-// that, y the rows; treelets_optimize numbers a workgroup wid.x + wid.y · x). The arguments end as the most that any count raised them to, which covers the final count: a
-// dispatch of teams that turns lone past params.team_below keeps the teams' larger grid, whose
-// extra workgroups find no treelet.
+// (`optimize_workgroups` in `dispatch_args`' rows). Each word ends as the most that any count
+// raised it to, and one count's x times y covers it, so the final count is covered: a dispatch of
+// teams that turns lone past params.team_below keeps the teams' larger grid, whose extra
+// workgroups find no treelet.
 fn raise_arguments(treelets: u32) {
-    let groups = optimize_workgroups(treelets);
+    let args = dispatch_args(optimize_workgroups(treelets));
     let at = SCHEDULE_ARGS + 3u * (params.level - 1u);
-    atomicMax(&schedule[at], min(groups, MAX_WORKGROUPS_X));
-    atomicMax(&schedule[at + 1u], (groups + MAX_WORKGROUPS_X - 1u) / MAX_WORKGROUPS_X);
-    atomicMax(&schedule[at + 2u], 1u);
+    atomicMax(&schedule[at], args.x);
+    atomicMax(&schedule[at + 1u], args.y);
+    atomicMax(&schedule[at + 2u], args.z);
 }
 
 @compute @workgroup_size(WORKGROUP)

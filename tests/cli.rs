@@ -270,18 +270,33 @@ fn bench_compares_dp_forms_on_the_same_tree() {
     }
 }
 
-/// The subtree width in effect by default on the device a bench record names (a CPU device fills
-/// the list, a GPU takes fewer subtrees per workgroup).
-fn default_subtree_width(record: &serde_json::Value) -> u64 {
-    let device = match record["device_type"].as_str() {
+/// The device type a bench record names.
+fn record_device(record: &serde_json::Value) -> wgpu::DeviceType {
+    match record["device_type"].as_str() {
         Some("Cpu") => wgpu::DeviceType::Cpu,
         Some("DiscreteGpu") => wgpu::DeviceType::DiscreteGpu,
         Some("IntegratedGpu") => wgpu::DeviceType::IntegratedGpu,
         Some("VirtualGpu") => wgpu::DeviceType::VirtualGpu,
         Some("Other") => wgpu::DeviceType::Other,
         other => panic!("unexpected device type {other:?}"),
-    };
-    u64::from(RoundSchedule::default().subtree_width(device))
+    }
+}
+
+/// The subtree width in effect by default on the device a bench record names (a CPU device fills
+/// the list, a GPU takes fewer subtrees per workgroup).
+fn default_subtree_width(record: &serde_json::Value) -> u64 {
+    u64::from(RoundSchedule::default().subtree_width(record_device(record)))
+}
+
+/// The schedule a bench record's tuning kept: its last adopted trial's, or the default.
+fn kept_schedule(record: &serde_json::Value) -> &str {
+    record["schedule_tuning"]["trials"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .rev()
+        .find(|t| t["adopted"] == true)
+        .map_or("default", |t| t["schedule"].as_str().unwrap())
 }
 
 /// `bench --subtree-levels 0,4,8` measures trbvh with each round's lowest levels by level and
@@ -461,17 +476,11 @@ fn bench_tunes_the_phased_rounds() {
     for part in ["t=", "dp=loop", "slots="] {
         assert!(schedules.iter().any(|s| s.contains(part)), "{schedules:?}");
     }
-    let kept = trials
-        .iter()
-        .rev()
-        .find(|t| t["adopted"] == true)
-        .map_or("default", |t| t["schedule"].as_str().unwrap());
+    let kept = kept_schedule(record);
     let slots = kept.split(' ').find_map(|p| p.strip_prefix("slots="));
-    let default = if record["device_type"] == "Cpu" {
-        "root"
-    } else {
-        "workgroup"
-    };
+    let default = RoundSchedule::default()
+        .root_slots(record_device(record))
+        .name();
     assert_eq!(
         record["root_slots"],
         slots.unwrap_or(default),
@@ -521,11 +530,7 @@ fn bench_tunes_the_schedule_on_request() {
             let tile_only = schedule.starts_with("tile=") || schedule == "default";
             assert!(treelets || tile_only, "{schedule}");
         }
-        let kept = trials
-            .iter()
-            .rev()
-            .find(|t| t["adopted"] == true)
-            .map_or("default", |t| t["schedule"].as_str().unwrap());
+        let kept = kept_schedule(record);
         assert!(record["schedule_tuning"]["kept"].is_string());
         let parts: Vec<&str> = kept.split(' ').collect();
         let value = |key: &str| parts.iter().find_map(|p| p.strip_prefix(key));
