@@ -112,6 +112,12 @@ pub(crate) struct CompiledKernel {
 /// Values of a kernel's pipeline-overridable constants (WGSL `override`), by name.
 pub type Overrides<'a> = &'a [(&'static str, f64)];
 
+/// A boolean pipeline-overridable constant (`override NAME: u32`, 0 or 1) set to `on`: the
+/// variants of a kernel whose modes are compiled apart.
+pub(crate) fn flag_override(name: &'static str, on: bool) -> (&'static str, f64) {
+    (name, f64::from(u8::from(on)))
+}
+
 /// The value `overrides` gives the integer constant `name`, if any.
 pub(crate) fn override_value(overrides: Overrides, name: &str) -> Option<u32> {
     overrides

@@ -28,7 +28,7 @@ pub use kernel::{
     check_climb_width, default_climb_width, Grid, Items, Kernel, KernelDecl, KernelInfo, Overrides,
     Slot, CLIMB_WIDTHS, WORKGROUP_WIDTH_OVERRIDE,
 };
-pub(crate) use kernel::{kernel, override_value};
+pub(crate) use kernel::{flag_override, kernel, override_value};
 pub use param_slab::ParamSlab;
 pub use readback::Readback;
 pub use recorder::{Pass, Recorder};

@@ -11,7 +11,8 @@ use super::paths_trace::{TraceParams, PATHS_TRACE, PATHS_TRACE_WIDE, POINT_LIGHT
 use crate::bvh::wide::Layout;
 use crate::device::{Geometry, Tree};
 use crate::gpu::{
-    read_buffer, storage_buffer_zeroed, GpuContext, GpuTimer, Grid, Kernel, ParamSlab, Recorder,
+    flag_override, read_buffer, storage_buffer_zeroed, GpuContext, GpuTimer, Grid, Kernel,
+    ParamSlab, Recorder,
 };
 use crate::scene::Camera;
 use crate::{Error, Result};
@@ -155,8 +156,7 @@ impl PathTracer {
             Layout::Wide => (&PATHS_TRACE_WIDE, &self.trace[1]),
         };
         by_layout[usize::from(lights)].get_or_init(|| {
-            let overrides = [(POINT_LIGHTS_OVERRIDE, f64::from(u8::from(lights)))];
-            Kernel::with_overrides(ctx, decl, &overrides)
+            Kernel::with_overrides(ctx, decl, &[flag_override(POINT_LIGHTS_OVERRIDE, lights)])
         })
     }
 

@@ -7,8 +7,8 @@ use crate::bvh::wide::Layout;
 use crate::device::{Geometry, Tree};
 use crate::geometry::{Hit, Ray};
 use crate::gpu::{
-    kernel, read_buffer, storage_buffer, storage_buffer_zeroed, GpuContext, Kernel, ParamSlab,
-    Recorder,
+    flag_override, kernel, read_buffer, storage_buffer, storage_buffer_zeroed, GpuContext, Kernel,
+    ParamSlab, Recorder,
 };
 use crate::{Error, Result};
 
@@ -100,7 +100,7 @@ fn query(
     }
     // What the leaves' references are tested through: the binary tree's indices into the
     // triangles, the wide tree's copies of its references' triangles.
-    let overrides = [(ANY_HIT_OVERRIDE, f64::from(u8::from(any_hit)))];
+    let overrides = [flag_override(ANY_HIT_OVERRIDE, any_hit)];
     let (kernel, nodes, leaf_data) = match layout {
         Layout::Binary => (
             Kernel::with_overrides(ctx, &RAYS_INTERSECT, &overrides),

@@ -12,7 +12,7 @@ use super::dp::CostModel;
 use super::nodes_compact::{CompactParams, NODES_COMPACT};
 use super::nodes_mark::{MarkParams, HAS_REFS_OVERRIDE, NODES_MARK};
 use super::rounds::TreeletState;
-use crate::gpu::{storage_buffer_zeroed, GpuContext, ItemCount, Kernel, Pass};
+use crate::gpu::{flag_override, storage_buffer_zeroed, GpuContext, ItemCount, Kernel, Pass};
 use crate::sort::PrefixScan;
 use crate::Result;
 
@@ -71,13 +71,13 @@ impl Collapse {
         let ctx = pass.ctx();
         let n = count.capacity();
         let node_count = 2 * n - 1;
-        let has_refs = u32::from(out.ref_tris.is_some());
+        let has_refs = out.ref_tris.is_some();
         let ref_tris = out.ref_tris.unwrap_or(&self.no_refs);
-        let mark_kernel = self.mark[has_refs as usize].get_or_init(|| {
+        let mark_kernel = self.mark[usize::from(has_refs)].get_or_init(|| {
             Kernel::with_overrides(
                 ctx,
                 &NODES_MARK,
-                &[(HAS_REFS_OVERRIDE, f64::from(has_refs))],
+                &[flag_override(HAS_REFS_OVERRIDE, has_refs)],
             )
         });
         let grid = mark_kernel.grid(ctx, node_count);
@@ -111,7 +111,7 @@ impl Collapse {
         let compact = CompactParams {
             leaf_count: n,
             row_pitch: grid.row_pitch,
-            has_refs,
+            has_refs: u32::from(has_refs),
             _pad: 0,
         };
         pass.dispatch(

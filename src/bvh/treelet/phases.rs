@@ -14,7 +14,9 @@ use std::sync::OnceLock;
 
 use super::rounds::{Round, RoundParams, TreeletRounds, TreeletState, SCHEDULE_ARGS};
 use crate::gpu::constants::MAX_LEVEL_DISPATCHES;
-use crate::gpu::{grow_storage_buffer, kernel, GpuContext, ItemCount, Kernel, Recorder};
+use crate::gpu::{
+    flag_override, grow_storage_buffer, kernel, GpuContext, ItemCount, Kernel, Recorder,
+};
 use crate::Result;
 
 kernel!(pub ROOTS_PHASE: RoundParams = "roots_phase"::"main", [256, 1, 1],
@@ -87,8 +89,8 @@ impl PhasedRounds {
     /// `roots_phase` taking its roots' slots `slots`.
     fn roots_phase(&self, ctx: &GpuContext, slots: RootSlots) -> &Kernel<RoundParams> {
         self.roots_phase[slots as usize].get_or_init(|| {
-            let aggregate = f64::from(u8::from(slots == RootSlots::Workgroup));
-            Kernel::with_overrides(ctx, &ROOTS_PHASE, &[(AGGREGATE_ROOTS_OVERRIDE, aggregate)])
+            let aggregate = flag_override(AGGREGATE_ROOTS_OVERRIDE, slots == RootSlots::Workgroup);
+            Kernel::with_overrides(ctx, &ROOTS_PHASE, &[aggregate])
         })
     }
 

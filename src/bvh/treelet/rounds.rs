@@ -46,8 +46,8 @@ use crate::gpu::constants::{
     MAX_LEVEL_DISPATCHES, MAX_SUBTREE_LEVELS, MAX_TREELET_SIZE, MIN_TREELET_SIZE, SUBTREE_LIST,
 };
 use crate::gpu::{
-    grow_storage_buffer, storage_buffer, GpuContext, Grid, ItemCount, Kernel, KernelDecl, Pass,
-    Recorder,
+    flag_override, grow_storage_buffer, storage_buffer, GpuContext, Grid, ItemCount, Kernel,
+    KernelDecl, Pass, Recorder,
 };
 use crate::{Error, Result};
 
@@ -521,10 +521,10 @@ impl TreeletKernels {
         let mut overrides = vec![
             (TREELET_SIZE_OVERRIDE, f64::from(treelet_size)),
             (TREELET_DP_LOOP_OVERRIDE, dp.override_value()),
-            (NEXT_LEVELS_OVERRIDE, f64::from(u8::from(next_levels))),
+            flag_override(NEXT_LEVELS_OVERRIDE, next_levels),
         ];
         if self.has_teams {
-            overrides.push((TREELET_TEAMS_OVERRIDE, f64::from(u8::from(team_path))));
+            overrides.push(flag_override(TREELET_TEAMS_OVERRIDE, team_path));
         }
         overrides
     }
