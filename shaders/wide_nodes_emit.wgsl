@@ -6,16 +6,32 @@
 // [first, end) of its record, the workgroups striding over them a wave at a time (one device
 // atomic per wave and counter allocates the wave's children and references). The last level of a
 // dispatch writes the record of the next: first = end of this level (the children allocated here
-// follow it), end = the largest end of those children, and ceil((end − first) / 64) workgroups
-// (capped; the invocations stride): none once a level allocates no children, so the level
+// follow it), end = the largest end of those children (each workgroup raises it once, for all its
+// nodes), and ceil((end − first) / 64) workgroups (capped; the invocations stride): none once a level allocates no children, so the level
 // dispatches past the tree's depth cost only their launch. The record the last dispatch writes
 // sizes wide_nodes_finish.wgsl, which emits the rest of the tree.
 #include "wide_collapse.wgsl"
 
-fn size_next_level(level: u32, first: u32, children_end: u32) {
-    atomicMax(&next_level[record_word(level + 1u, 4u)], children_end);
-    let groups = min((children_end - first + EMIT_WORKGROUP - 1u) / EMIT_WORKGROUP, 65535u);
-    atomicMax(&next_level[record_word(level + 1u, 0u)], groups);
+// The end of the children this workgroup's nodes of the level allocated (0: none).
+var<workgroup> workgroup_children_end: atomic<u32>;
+
+// Sizes the next level's record to cover the children that this workgroup's nodes of level
+// `level` allocated, up to `children_end` (this invocation's; 0: none), with one device atomic
+// per word for the workgroup: per node, a level's thousands of nodes would all raise the same two
+// words. Every invocation of the workgroup calls it once per level (uniform control flow).
+fn size_next_level(level: u32, first: u32, children_end: u32, lid: u32) {
+    if children_end != 0u {
+        atomicMax(&workgroup_children_end, children_end);
+    }
+    workgroupBarrier();
+    if lid == 0u {
+        let end = atomicLoad(&workgroup_children_end);
+        if end != 0u {
+            atomicMax(&next_level[record_word(level + 1u, 4u)], end);
+            let groups = min((end - first + EMIT_WORKGROUP - 1u) / EMIT_WORKGROUP, 65535u);
+            atomicMax(&next_level[record_word(level + 1u, 0u)], groups);
+        }
+    }
 }
 
 fn open_next_level(level: u32, first: u32) {
@@ -49,11 +65,13 @@ fn main(
             if level == top && lid == 0u {
                 open_next_level(top, end);
             }
+            var children_end = 0u;
             for (var wave = first; wave < end; wave += EMIT_WORKGROUP) {
                 let children = emit_wave_node(wave + lid, wave + lid < end, lid);
-                if level == top && children.y > 0u {
-                    size_next_level(top, end, children.x + children.y);
-                }
+                children_end = max(children_end, select(0u, children.x + children.y, children.y > 0u));
+            }
+            if level == top {
+                size_next_level(top, end, children_end, lid);
             }
             // This level's sources are stored before the next level reads them.
             storageBarrier();
@@ -74,10 +92,10 @@ fn main(
     }
     // The workgroups stride over the level's nodes a wave at a time.
     let stride = groups.x * EMIT_WORKGROUP;
+    var children_end = 0u;
     for (var wave = first + wid.x * EMIT_WORKGROUP; wave < end; wave += stride) {
         let children = emit_wave_node(wave + lid, wave + lid < end, lid);
-        if children.y > 0u {
-            size_next_level(params.level, end, children.x + children.y);
-        }
+        children_end = max(children_end, select(0u, children.x + children.y, children.y > 0u));
     }
+    size_next_level(params.level, end, children_end, lid);
 }
