@@ -9,13 +9,14 @@
 // final here; a root's cost is recomputed when its level is processed. The roots of each level
 // up to level_dispatches + 1 go into that level's bucket as they are found (treelet_round.wgsl:
 // a counter per level in the schedule buffer, the level's slots of `roots`; a workgroup reserves
-// the slots of the roots it found together, one atomic per level), and the workgroup
-// that finishes last (a ticket in the schedule buffer; no workgroup waits for another) writes
-// each dispatched level's indirect arguments from the final counts: a workgroup per treelet
-// below params.team_below treelets, else per 32 treelets (treelets_optimize.wgsl). With subtrees
+// the slots of the roots it found together, one atomic per level), and whoever takes slots that
+// need one more workgroup of the level's dispatch raises its indirect arguments to cover them
+// (`atomicMax`: the schedule is zero at the round's start; a workgroup per treelet below
+// params.team_below treelets, else per 32 treelets, treelets_optimize.wgsl), so no workgroup
+// waits for the others and none finishes the schedule (as roots_phase.wgsl). With subtrees
 // (params.subtree_levels = K > 0) the buckets of levels 1 ..= K hold only the cut roots of their
 // level (of level K at most, whose parent is above K, or the tree's root), and level 1's
-// arguments count the workgroups of all K (subtrees_optimize.wgsl).
+// arguments count the workgroups of all K (subtrees_optimize.wgsl), summed in the schedule.
 // The first round's climb also builds the LBVH over the sorted keys, as lbvh_climb.wgsl does for a
 // plain LBVH: its hierarchy (Karras 2012's radix tree and layout, found bottom-up as in Apetrei
 // 2014: radix_climb.wgsl) with the parent links, and its boxes (Karras 2012 §4), each leaf's from
@@ -55,8 +56,6 @@ override WORKGROUP_WIDTH: u32 = 64u;
 #include "node_words.wgsl"
 #include "radix_climb.wgsl"
 
-var<workgroup> is_last: u32;
-
 fn is_root(node: u32) -> bool {
     return atomicLoad(&prim_counts[node]) >= params.gamma;
 }
@@ -85,14 +84,50 @@ fn cut_bucket(level: u32) -> u32 {
     return select(0u, level, level <= params.subtree_levels);
 }
 
+// Raises the indirect arguments of level `level`'s dispatch (`dispatch_args`' rows; levels
+// 1 ..= params.level_dispatches, the one above them is climbed) to cover the roots bucketed there
+// so far, `after`, where the slots just taken began at `before`. Only a count that needs another
+// workgroup raises them: the count that reached the same workgroups raised them for it, so each
+// word ends as the most that any count raised it to, and one count's x times y covers the final
+// count (a dispatch of teams that turns lone past params.team_below keeps the teams' larger grid,
+// whose extra workgroups find no treelet). With subtrees, a level up to K adds its new
+// workgroups to their sum (SCHEDULE_SUBTREE_GROUPS, `subtrees_per_workgroup` cut roots each) and
+// level 1's arguments cover the sum: a count's additions telescope, so the final sum is the
+// levels' workgroups.
+fn raise_arguments(level: u32, before: u32, after: u32) {
+    if level > params.level_dispatches {
+        return;
+    }
+    var row = level;
+    var groups = optimize_workgroups(after);
+    if level <= params.subtree_levels {
+        let per = subtrees_per_workgroup(level);
+        let added = (after + per - 1u) / per - (before + per - 1u) / per;
+        if added == 0u {
+            return;
+        }
+        groups = atomicAdd(&schedule[SCHEDULE_SUBTREE_GROUPS], added) + added;
+        row = 1u;
+    } else if groups == optimize_workgroups(before) {
+        return;
+    }
+    let args = dispatch_args(groups);
+    let at = SCHEDULE_ARGS + 3u * (row - 1u);
+    atomicMax(&schedule[at], args.x);
+    atomicMax(&schedule[at + 1u], args.y);
+    atomicMax(&schedule[at + 2u], args.z);
+}
+
 // Once the workgroup has counted its roots per level: reserves their slots, one device atomic
-// per level (between two barriers).
+// per level (between two barriers), and raises the levels' arguments.
 fn reserve_workgroup_slots(lid: u32) {
     workgroupBarrier();
     for (var l = lid; l <= params.level_dispatches; l += WORKGROUP_WIDTH) {
         let count = atomicLoad(&workgroup_roots[l]);
         if count != 0u {
-            workgroup_slots[l] = atomicAdd(&schedule[l], count);
+            let first = atomicAdd(&schedule[l], count);
+            workgroup_slots[l] = first;
+            raise_arguments(l + 1u, first, first + count);
         }
     }
     workgroupBarrier();
@@ -126,7 +161,9 @@ var<workgroup> queue_length: u32;
 
 // Adds the root `node` to bucket `bucket` (>= 1), with a device atomic of its own.
 fn bucket_alone(node: u32, bucket: u32) {
-    roots[level_start(bucket) + atomicAdd(&schedule[bucket - 1u], 1u)] = node;
+    let slot = atomicAdd(&schedule[bucket - 1u], 1u);
+    roots[level_start(bucket) + slot] = node;
+    raise_arguments(bucket, slot, slot + 1u);
 }
 
 // Queues the root `node` for bucket `bucket` (0: none) for `bucket_queue`.
@@ -181,29 +218,6 @@ fn bucket_internal_node(j: u32, n: u32, lid: u32) {
     bucket_together(j, bucket, lid);
 }
 
-// The last workgroup: each dispatched level's indirect arguments, from its root count, the
-// levels spread over the invocations (so that none waits for the counts one after another).
-fn write_dispatch_args(lid: u32) {
-    for (var level = lid + 1u; level <= params.level_dispatches; level += WORKGROUP_WIDTH) {
-        let size = atomicLoad(&schedule[level - 1u]);
-        // A workgroup per 32 treelets or per team's treelet; with subtrees, level 1's workgroups
-        // are those of every level's cut roots (subtrees_optimize.wgsl).
-        var groups = optimize_workgroups(size);
-        if level == 1u && params.subtree_levels != 0u {
-            groups = 0u;
-            for (var l = 1u; l <= params.subtree_levels; l++) {
-                let per = subtrees_per_workgroup(l);
-                groups += (atomicLoad(&schedule[l - 1u]) + per - 1u) / per;
-            }
-        }
-        let args = dispatch_args(groups);
-        let at = SCHEDULE_ARGS + 3u * (level - 1u);
-        atomicStore(&schedule[at], args.x);
-        atomicStore(&schedule[at + 1u], args.y);
-        atomicStore(&schedule[at + 2u], args.z);
-    }
-}
-
 // The climbing node, its count, cost and level (what it stored), carried up the climb: only the
 // sibling's are loaded.
 var<private> climbing_node: u32;
@@ -247,7 +261,6 @@ fn finish_parent(p: EmittedParent) {
 fn main(
     @builtin(global_invocation_id) gid: vec3<u32>,
     @builtin(local_invocation_index) lid: u32,
-    @builtin(num_workgroups) nwg: vec3<u32>,
 ) {
     let j = gid.x + gid.y * params.row_pitch;
     let n = min(params.count, count_limit[0]);
@@ -275,15 +288,4 @@ fn main(
         climb(leaf, leaf_box, has_leaf, lid);
         bucket_queue(lid);
     }
-    // Release: the workgroup's roots are counted before the ticket is taken.
-    storageBarrier();
-    if lid == 0u {
-        is_last = u32(atomicAdd(&schedule[SCHEDULE_TICKET], 1u) + 1u == nwg.x * nwg.y);
-    }
-    if workgroupUniformLoad(&is_last) == 0u {
-        return;
-    }
-    // Acquire: every workgroup's counts are visible.
-    storageBarrier();
-    write_dispatch_args(lid);
 }

@@ -60,9 +60,10 @@ struct RoundParams {
 const NO_NEXT_ROUND: u32 = 0xffffffffu;
 
 // The schedule buffer (u32 words): per level L = 1 ..= MAX_LEVEL_DISPATCHES + 1, the number of
-// treelet roots at L bucketed so far (word L - 1); the ticket of nodes_level.wgsl's workgroups;
-// then the indirect dispatch arguments (x, y, z) of each level's treelets_optimize dispatch.
-const SCHEDULE_TICKET: u32 = MAX_LEVEL_DISPATCHES + 1u;
+// treelet roots at L bucketed so far (word L - 1); with subtrees, the workgroups of
+// subtrees_optimize.wgsl counted so far (nodes_level.wgsl); then the indirect dispatch arguments
+// (x, y, z) of each level's treelets_optimize dispatch.
+const SCHEDULE_SUBTREE_GROUPS: u32 = MAX_LEVEL_DISPATCHES + 1u;
 const SCHEDULE_ARGS: u32 = MAX_LEVEL_DISPATCHES + 2u;
 
 // Invocations per workgroup of treelets_optimize.wgsl.

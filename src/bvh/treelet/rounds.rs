@@ -176,8 +176,9 @@ impl RoundParams {
     }
 }
 
-/// Words of the schedule buffer: the roots per level (levels 1 ..= MAX_LEVEL_DISPATCHES + 1), a
-/// ticket, then the indirect arguments (x, y, z) of each dispatched level.
+/// Words of the schedule buffer: the roots per level (levels 1 ..= MAX_LEVEL_DISPATCHES + 1), the
+/// subtrees' workgroups, then the indirect arguments (x, y, z) of each dispatched level
+/// (treelet_round.wgsl).
 pub(crate) const SCHEDULE_WORDS: u64 = SCHEDULE_ARGS + 3 * MAX_LEVEL_DISPATCHES as u64;
 /// First word of the indirect arguments in the schedule buffer.
 pub(crate) const SCHEDULE_ARGS: u64 = MAX_LEVEL_DISPATCHES as u64 + 2;
@@ -533,8 +534,7 @@ impl TreeletKernels {
 /// The kernels of a round and their buckets.
 pub(crate) struct TreeletRounds {
     /// `nodes_level` for the first round's climb (`Kernel::climb`: the device's climb
-    /// width) and for the later rounds (one pass over the internal nodes, a ticket per workgroup:
-    /// the declared width).
+    /// width) and for the later rounds (one pass over the internal nodes: the declared width).
     climb_level: Kernel<RoundParams>,
     level: Kernel<RoundParams>,
     /// `treelets_optimize`, `subtrees_optimize` and `treelets_climb` per treelet size and DP
