@@ -165,7 +165,9 @@ export -f teams
 phases() {
   local scenes=${PHASE_SCENES:-conference crytek_sponza sibenik lost_empire field:224 field:707 field:2000}
   # In the order of what decides most, as the step's cap may stop it: the bottom-up rounds
-  # (phases 0) against the preset on every scene; teams in the preset's phases; the roots' slots
+  # (phases 0) against the preset on every scene; teams in the preset's phases; the DP written out
+  # against its loop form there (an H200 ran a lone treelet's loop form in about half the time:
+  # README, "Where a small treelet level's time goes"); the roots' slots
   # per workgroup (the GPU default) against per root; every dispatch of the preset timed
   # (roots_phase against treelets_optimize, phase by phase); then the previous preset, 7, 7, 7
   # and 14, 7, 7.
@@ -176,6 +178,8 @@ phases() {
   for s in conference field:707; do
     timeout 30 $TREELET bench --scene $s --builder trbvh --preset phased \
       --team-below 0,2048,4294967295 --tune-schedule off $small >> $res/phases.jsonl
+    timeout 30 $TREELET bench --scene $s --builder trbvh --preset phased \
+      --treelet-dp unrolled,loop --tune-schedule off $small >> $res/phases.jsonl
     timeout 30 $TREELET bench --scene $s --builder trbvh --preset phased \
       --root-slots workgroup,root --tune-schedule off $small >> $res/phases.jsonl
     timeout 30 $TREELET bench --scene $s --builder trbvh --preset phased --profile-dispatches \
@@ -278,8 +282,9 @@ def round_rows(name, title, columns):
               f" {r['dispatches']:4} {r.get('sah') or 0:.4f}")
 round_rows("subtrees.jsonl", "builder, subtree levels, width, level dispatches asked",
            [("builder", 11), ("subtree_levels", 2), ("subtree_width", 4), ("level_dispatches", 4)])
-round_rows("phases.jsonl", "builder, rounds, phases, first round's, teams below",
-           [("builder", 11), ("rounds", 2), ("phases", 4), ("first_round_phases", 4), ("team_below", 10)])
+round_rows("phases.jsonl", "builder, rounds, phases, first round's, teams below, DP, root slots",
+           [("builder", 11), ("rounds", 2), ("phases", 4), ("first_round_phases", 4), ("team_below", 10),
+            ("treelet_dp", 8), ("root_slots", 9)])
 print("phases_profile.jsonl: scene, per kernel: dispatches and ms in all; then each phase's roots_phase + treelets_optimize ms")
 for r in rows("phases_profile.jsonl"):
     totals = {}
