@@ -721,9 +721,15 @@ fn teams_lone_invocations_and_dp_forms_build_the_same_tree() {
             // levels, of the climb). The loop form with the default schedule only (it dispatches
             // the low levels and climbs the top ones): on lavapipe, climbing every level with it
             // takes minutes.
+            // A threshold of 3 treelets: a level's count passes it while its slots are taken, so
+            // its dispatch keeps the teams' grid for lone invocations (the arguments only grow).
             let unrolled = TreeletDp::Unrolled;
             let teams = (u32::MAX, u32::MAX, unrolled, unrolled);
-            let mut variants = vec![(0, 0, unrolled, unrolled), teams];
+            let mut variants = vec![
+                (0, 0, unrolled, unrolled),
+                teams,
+                (3, 3, unrolled, unrolled),
+            ];
             if levels.is_none() {
                 variants.push((0, 0, TreeletDp::Loop, TreeletDp::Loop));
                 variants.push((0, 0, unrolled, TreeletDp::Loop));
