@@ -7,9 +7,10 @@
 // atomic per wave and counter allocates the wave's children and references). The last level of a
 // dispatch writes the record of the next: first = end of this level (the children allocated here
 // follow it), end = the largest end of those children (each workgroup raises it once, for all its
-// nodes), and ceil((end − first) / 64) workgroups (capped; the invocations stride): none once a level allocates no children, so the level
-// dispatches past the tree's depth cost only their launch. The record the last dispatch writes
-// sizes wide_nodes_finish.wgsl, which emits the rest of the tree.
+// nodes), and ceil((end − first) / 64) workgroups (capped; the invocations stride): none once a
+// level allocates no children, so the level dispatches past the tree's depth cost only their
+// launch. The record the last dispatch writes sizes wide_nodes_finish.wgsl, which emits the rest
+// of the tree.
 #include "wide_collapse.wgsl"
 
 // The end of the children this workgroup's nodes of the level allocated (0: none).
