@@ -84,38 +84,62 @@ fn cut_bucket(level: u32) -> u32 {
     return select(0u, level, level <= params.subtree_levels);
 }
 
-// Raises the indirect arguments of level `level`'s dispatch (`dispatch_args`' rows; levels
-// 1 ..= params.level_dispatches, the one above them is climbed) to cover the roots bucketed there
-// so far, `after`, where the slots just taken began at `before`. Only a count that needs another
-// workgroup raises them: the count that reached the same workgroups raised them for it, so each
-// word ends as the most that any count raised it to, and one count's x times y covers the final
-// count (a dispatch of teams that turns lone past params.team_below keeps the teams' larger grid,
-// whose extra workgroups find no treelet). With subtrees, a level up to K adds its new
-// workgroups to their sum (SCHEDULE_SUBTREE_GROUPS, `subtrees_per_workgroup` cut roots each) and
-// level 1's arguments cover the sum: a count's additions telescope, so the final sum is the
-// levels' workgroups.
-fn raise_arguments(level: u32, before: u32, after: u32) {
-    if level > params.level_dispatches {
-        return;
-    }
-    var row = level;
-    var groups = optimize_workgroups(after);
-    if level <= params.subtree_levels {
-        let per = subtrees_per_workgroup(level);
-        let added = (after + per - 1u) / per - (before + per - 1u) / per;
-        if added == 0u {
-            return;
-        }
-        groups = atomicAdd(&schedule[SCHEDULE_SUBTREE_GROUPS], added) + added;
-        row = 1u;
-    } else if groups == optimize_workgroups(before) {
-        return;
-    }
-    let args = dispatch_args(groups);
-    let at = SCHEDULE_ARGS + 3u * (row - 1u);
+// Per bucketed level, the end of the slots this workgroup's roots took one at a time
+// (`bucket_alone`; 0: none), and with subtrees, the subtrees' workgroups that the workgroup's
+// slots of levels 1 ..= K newly need (`raise_arguments`).
+var<workgroup> alone_ends: array<atomic<u32>, MAX_LEVEL_DISPATCHES + 1u>;
+var<workgroup> subtree_groups_added: atomic<u32>;
+
+// Raises the indirect arguments of level `level`'s dispatch (`dispatch_args`' rows, word-wise
+// maxima) to `args`.
+fn raise_row(level: u32, args: vec3<u32>) {
+    let at = SCHEDULE_ARGS + 3u * (level - 1u);
     atomicMax(&schedule[at], args.x);
     atomicMax(&schedule[at + 1u], args.y);
     atomicMax(&schedule[at + 2u], args.z);
+}
+
+// Raises the arguments of level `level`'s dispatch (levels 1 ..= params.level_dispatches; the
+// one above them is climbed) for this workgroup's slots there: those it took together, from
+// `before` to `after`, and those its roots took one at a time, up to `alone_end` (0: none). Slots
+// taken together raise them where their count needs other workgroups than the count before them;
+// slots taken alone, for the last one's count. So the final count, or one that needs as many
+// workgroups, has raised them: going down from the final count, the slots taken together that
+// raised nothing reach a count that raised them, as their workgroups' other slots lie elsewhere.
+// Each word ends as the most any count raised it to, whose x times y covers the final count (a
+// dispatch of teams that turns lone past params.team_below keeps the teams' larger grid, whose
+// extra workgroups find no treelet). With subtrees, a level up to K adds the workgroups its
+// slots taken together newly need to the workgroup's sum instead (`raise_subtree_arguments`).
+fn raise_arguments(level: u32, before: u32, after: u32, alone_end: u32) {
+    if level > params.level_dispatches {
+        return;
+    }
+    if level <= params.subtree_levels {
+        let per = subtrees_per_workgroup(level);
+        let added = (after + per - 1u) / per - (before + per - 1u) / per;
+        if added != 0u {
+            atomicAdd(&subtree_groups_added, added);
+        }
+        return;
+    }
+    let needs_more = optimize_workgroups(after) != optimize_workgroups(before);
+    let count = max(select(0u, after, needs_more), alone_end);
+    if count != 0u {
+        raise_row(level, dispatch_args(optimize_workgroups(count)));
+    }
+}
+
+// With subtrees, level 1's arguments count the workgroups of every level's cut roots
+// (subtrees_optimize.wgsl): the workgroup adds those its slots newly need to their sum in the
+// schedule and raises level 1's arguments to the sum. Slots taken together add ⌈end / per⌉ −
+// ⌈start / per⌉ for their level, a slot taken alone one (at least its share), so the additions
+// add up to at least the levels' ⌈count / per⌉ (extra workgroups find no cut roots), and the last
+// to add raises the arguments for the final sum.
+fn raise_subtree_arguments() {
+    let added = atomicLoad(&subtree_groups_added);
+    if added != 0u {
+        raise_row(1u, dispatch_args(atomicAdd(&schedule[SCHEDULE_SUBTREE_GROUPS], added) + added));
+    }
 }
 
 // Once the workgroup has counted its roots per level: reserves their slots, one device atomic
@@ -124,13 +148,17 @@ fn reserve_workgroup_slots(lid: u32) {
     workgroupBarrier();
     for (var l = lid; l <= params.level_dispatches; l += WORKGROUP_WIDTH) {
         let count = atomicLoad(&workgroup_roots[l]);
+        var first = 0u;
         if count != 0u {
-            let first = atomicAdd(&schedule[l], count);
+            first = atomicAdd(&schedule[l], count);
             workgroup_slots[l] = first;
-            raise_arguments(l + 1u, first, first + count);
         }
+        raise_arguments(l + 1u, first, first + count, atomicLoad(&alone_ends[l]));
     }
     workgroupBarrier();
+    if lid == 0u {
+        raise_subtree_arguments();
+    }
 }
 
 // Puts the root `node` into bucket `bucket` (level_bucket, cut_bucket; 0: none): the workgroup
@@ -159,11 +187,15 @@ var<workgroup> root_queue: array<vec3<u32>, ROOT_QUEUE>;
 var<workgroup> queued_roots: atomic<u32>;
 var<workgroup> queue_length: u32;
 
-// Adds the root `node` to bucket `bucket` (>= 1), with a device atomic of its own.
+// Adds the root `node` to bucket `bucket` (>= 1), with a device atomic of its own; the workgroup
+// raises the bucket's arguments for it after the climb (`reserve_workgroup_slots`).
 fn bucket_alone(node: u32, bucket: u32) {
     let slot = atomicAdd(&schedule[bucket - 1u], 1u);
     roots[level_start(bucket) + slot] = node;
-    raise_arguments(bucket, slot, slot + 1u);
+    atomicMax(&alone_ends[bucket - 1u], slot + 1u);
+    if bucket <= params.subtree_levels {
+        atomicAdd(&subtree_groups_added, 1u);
+    }
 }
 
 // Queues the root `node` for bucket `bucket` (0: none) for `bucket_queue`.
