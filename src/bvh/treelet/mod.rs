@@ -661,12 +661,17 @@ impl TrbvhBuilder {
             .filter(|_| gammas[0] != u32::MAX);
         match (phases, overlap) {
             (Some(phases), _) => {
-                // The first round's schedule builds the LBVH with its counts and costs (its roots of
-                // level 1, bucketed too, go unused); then every round phase by phase.
+                // The first round's schedule builds the LBVH with its counts and costs only (γ =
+                // u32::MAX: no levels or roots, which the phases find for themselves); then every
+                // round phase by phase.
                 rec.encoder().clear_buffer(&scratch.schedule, 0, None);
                 let mut pass = rec.pass("treelets");
+                let lbvh = Round {
+                    gamma: u32::MAX,
+                    ..round(0)
+                };
                 self.rounds
-                    .record_levels(&mut pass, ctx, count, &state, &round(0), 0);
+                    .record_levels(&mut pass, ctx, count, &state, &lbvh, 0);
                 drop(pass);
                 for r in 0..gammas.len() {
                     rec.encoder().clear_buffer(&scratch.schedule, 0, None);
