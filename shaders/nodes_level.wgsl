@@ -9,14 +9,15 @@
 // final here; a root's cost is recomputed when its level is processed. The roots of each level
 // up to level_dispatches + 1 go into that level's bucket as they are found (treelet_round.wgsl:
 // a counter per level in the schedule buffer, the level's slots of `roots`; a workgroup reserves
-// the slots of the roots it found together, one atomic per level), and whoever takes slots that
-// need one more workgroup of the level's dispatch raises its indirect arguments to cover them
+// the slots of the roots it found together, one atomic per level), and each workgroup whose
+// slots need more workgroups of a level's dispatch raises its indirect arguments to cover them
 // (`atomicMax`: the schedule is zero at the round's start; a workgroup per treelet below
-// params.team_below treelets, else per 32 treelets, treelets_optimize.wgsl), so no workgroup
-// waits for the others and none finishes the schedule (as roots_phase.wgsl). With subtrees
-// (params.subtree_levels = K > 0) the buckets of levels 1 ..= K hold only the cut roots of their
-// level (of level K at most, whose parent is above K, or the tree's root), and level 1's
-// arguments count the workgroups of all K (subtrees_optimize.wgsl), summed in the schedule.
+// params.team_below treelets, else per 32 treelets, treelets_optimize.wgsl; `raise_arguments`),
+// so no workgroup waits for the others and none finishes the schedule (as roots_phase.wgsl).
+// With subtrees (params.subtree_levels = K > 0) the buckets of levels 1 ..= K hold only the cut
+// roots of their level (of level K at most, whose parent is above K, or the tree's root), and
+// level 1's arguments count the workgroups of all K (subtrees_optimize.wgsl), summed in the
+// schedule.
 // The first round's climb also builds the LBVH over the sorted keys, as lbvh_climb.wgsl does for a
 // plain LBVH: its hierarchy (Karras 2012's radix tree and layout, found bottom-up as in Apetrei
 // 2014: radix_climb.wgsl) with the parent links, and its boxes (Karras 2012 §4), each leaf's from
