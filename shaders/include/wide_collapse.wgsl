@@ -8,9 +8,9 @@
 //      SAH-optimal collapse;
 //    - greedy: start from its two children; while fewer than 8, open the internal child of the
 //      largest surface area (its two children replace it), the common cheaper collapse.
-// 2. Slots: child j goes to the free slot s maximizing Σ_a ±(centre_j − centre_node)_a (+ where
-//    bit a of s is set), pairs taken greedily best first (the paper's octant assignment, greedy
-//    instead of an auction); the traversal then visits slots in ray-octant order.
+// 2. Slots: child by child, child j goes to the free slot s maximizing Σ_a ±(centre_j −
+//    centre_node)_a (+ where bit a of s is set) (the paper's octant assignment, greedy instead of
+//    an auction); the traversal then visits slots in ray-octant order.
 // 3. Quantization: per axis the smallest exponent e with origin + 255·2^e ≥ the node's max, and
 //    per child lo = the largest q with origin + q·2^e ≤ min, hi = the smallest with ≥ max (f32
 //    arithmetic; the products are exact, so fused or not every device rounds alike).
@@ -135,8 +135,8 @@ fn set_child(child: ptr<function, array<BvhNode, 8>>, child_index: ptr<function,
     }
 }
 
-// Below every score: a (child, slot) pair scores more than this to be taken (the CPU twin's
-// start).
+// Below every score: a slot scores more than this to be taken over the first free one (the CPU
+// twin's start).
 const NO_SCORE: f32 = -3.4e38;
 
 // A child's scores for slots 0-3 and 4-7: Σ_a ±(centre_child − centre_node)_a, + where bit a of
@@ -239,48 +239,29 @@ fn draft_wide_node(source: u32) -> WideDraft {
     }
     let centre = lo + hi;
 
-    // Octant slots, best (child, slot) pair first (the first child, then the first slot, of
-    // equal scores). Each child's eight scores Σ_a ±offset_a (+ where bit a of the slot is set)
-    // are two vec4 of slots 0-3 and 4-7 (`slot_scores`), computed again in every round instead
-    // of kept: 64 fewer live words (RADV's compiler: 192 -> 144 registers,
-    // `scripts/shader-stats.sh`). A round takes the best free score of each unplaced child, then
-    // the first free slot of the best child with that score: the pairs of scanning every (child,
-    // free slot) pair in order. The loops run over all eight children (those past `count` count
-    // as placed), so that no array is indexed by a value a lane computes: such an array lives in
-    // memory (a GPU's local memory, a gather per lane on lavapipe).
+    // Octant slots, child by child in the draft's order: each takes the free slot of its best
+    // score Σ_a ±offset_a (+ where bit a of the slot is set; the first of equal scores, the first
+    // free slot where none beats NO_SCORE), the CPU twin's scan. A child's eight scores are two
+    // vec4 of slots 0-3 and 4-7 (`slot_scores`, the twin's sums in its order). The loops run over
+    // all eight children (those past `count` take no slot), so that no array is indexed by a value
+    // a lane computes: such an array lives in memory (a GPU's local memory, a gather per lane on
+    // lavapipe).
     // Three bits per child: its slot.
     var slot_bits = 0u;
-    var free_low = vec4<bool>(true);
-    var free_high = vec4<bool>(true);
-    var placed = 0xffu & ~((1u << count) - 1u);
-    for (var round = 0u; round < count; round++) {
+    var free = 0xffu;
+    for (var j = 0u; j < 8u; j++) {
+        let scores = slot_scores(child[j], centre);
         var best_score = NO_SCORE;
-        var best_child = 0u;
-        var best_low = vec4<f32>(0.0);
-        var best_high = vec4<f32>(0.0);
-        for (var j = 0u; j < 8u; j++) {
-            let scores = slot_scores(child[j], centre);
-            let low = select(vec4<f32>(-F32_MAX), scores[0], free_low);
-            let high = select(vec4<f32>(-F32_MAX), scores[1], free_high);
-            let both = max(low, high);
-            let score = max(max(both.x, both.y), max(both.z, both.w));
-            let better = ((placed >> j) & 1u) == 0u && score > best_score;
+        var slot = firstTrailingBit(free);
+        for (var s = 0u; s < 8u; s++) {
+            let score = select(scores[1][s & 3u], scores[0][s & 3u], s < 4u);
+            let better = ((free >> s) & 1u) != 0u && score > best_score;
             best_score = select(best_score, score, better);
-            best_child = select(best_child, j, better);
-            best_low = select(best_low, scores[0], better);
-            best_high = select(best_high, scores[1], better);
+            slot = select(slot, s, better);
         }
-        let low = free_low & (best_low == vec4<f32>(best_score));
-        let high = free_high & (best_high == vec4<f32>(best_score));
-        let slots = select(vec4<u32>(0u), vec4<u32>(1u, 2u, 4u, 8u), low) | select(vec4<u32>(0u), vec4<u32>(16u, 32u, 64u, 128u), high);
-        let mask = slots.x | slots.y | slots.z | slots.w;
-        // No score beat NO_SCORE (only with boxes near the f32 range): child 0 takes slot 0
-        // again, as in the CPU twin.
-        let slot = select(0u, firstTrailingBit(mask), mask != 0u);
-        slot_bits = (slot_bits & ~(7u << (3u * best_child))) | (slot << (3u * best_child));
-        placed |= 1u << best_child;
-        free_low &= vec4<u32>(slot) != vec4<u32>(0u, 1u, 2u, 3u);
-        free_high &= vec4<u32>(slot) != vec4<u32>(4u, 5u, 6u, 7u);
+        let takes = j < count;
+        slot_bits |= select(0u, slot << (3u * j), takes);
+        free &= select(0xffu, ~(1u << slot), takes);
     }
 
     let e = vec3<u32>(axis_exponent(lo.x, hi.x), axis_exponent(lo.y, hi.y), axis_exponent(lo.z, hi.z));

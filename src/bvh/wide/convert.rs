@@ -3,9 +3,9 @@
 //! Ylitie, Karras & Laine 2017 §3 with a greedy collapse in place of their SAH-optimal DP:
 //! 1. children of a wide node: start from a binary node's two children and, while fewer than 8,
 //!    open the internal child of the largest surface area;
-//! 2. slots: the (child, slot) pair of the largest Σ_a ±(centre_child − centre_node)_a (+ where
-//!    bit a of the slot is set) first, then the next among the rest (the paper's octant
-//!    assignment, solved greedily): the traversal visits slots in ray-octant order;
+//! 2. slots: child by child, the free slot of the largest Σ_a ±(centre_child − centre_node)_a
+//!    (+ where bit a of the slot is set) (the paper's octant assignment, solved greedily): the
+//!    traversal visits slots in ray-octant order;
 //! 3. quantization: per axis the smallest exponent with origin + 255·2^e ≥ max, per child the
 //!    tightest planes that still contain its box when decoded in f32 (conservative).
 //!
@@ -133,29 +133,27 @@ pub(crate) fn open_children(bvh: &Bvh, source: u32) -> Vec<u32> {
     children
 }
 
-/// The slot of each child: greedy best-first octant assignment.
+/// The slot of each child: child by child, the free slot of its best score (greedy octant
+/// assignment; the first of equal scores, the first free slot where none beats -3.4e38).
 fn assign_slots(children: &[&BvhNode], centre: [f32; 3]) -> [usize; WIDTH] {
     let mut slot_of = [0; WIDTH];
     let mut free = [true; WIDTH];
-    let mut placed = [false; WIDTH];
-    for _ in 0..children.len() {
-        let (mut best_score, mut best_child, mut best_slot) = (-3.4e38f32, 0, 0);
-        for (j, c) in children.iter().enumerate() {
-            if placed[j] {
-                continue;
-            }
-            let d: [f32; 3] = std::array::from_fn(|a| (c.min[a] + c.max[a]) - centre[a]);
-            for (s, _) in free.iter().enumerate().filter(|(_, &f)| f) {
-                let signed = |a: usize| if s >> a & 1 != 0 { d[a] } else { -d[a] };
-                let score = signed(0) + signed(1) + signed(2);
-                if score > best_score {
-                    (best_score, best_child, best_slot) = (score, j, s);
-                }
+    for (j, c) in children.iter().enumerate() {
+        let d: [f32; 3] = std::array::from_fn(|a| (c.min[a] + c.max[a]) - centre[a]);
+        let mut slot = free
+            .iter()
+            .position(|&f| f)
+            .expect("a free slot for each of at most WIDTH children");
+        let mut best_score = -3.4e38f32;
+        for s in (0..WIDTH).filter(|&s| free[s]) {
+            let signed = |a: usize| if s >> a & 1 != 0 { d[a] } else { -d[a] };
+            let score = signed(0) + signed(1) + signed(2);
+            if score > best_score {
+                (best_score, slot) = (score, s);
             }
         }
-        slot_of[best_child] = best_slot;
-        placed[best_child] = true;
-        free[best_slot] = false;
+        slot_of[j] = slot;
+        free[slot] = false;
     }
     slot_of
 }
