@@ -55,6 +55,7 @@ override WORKGROUP_WIDTH: u32 = 64u;
 @group(0) @binding(12) var<storage, read> keys: array<vec2<u32>>;
 
 #include "node_words.wgsl"
+#include "treelet_arguments.wgsl"
 #include "radix_climb.wgsl"
 
 fn is_root(node: u32) -> bool {
@@ -91,15 +92,6 @@ fn cut_bucket(level: u32) -> u32 {
 var<workgroup> alone_ends: array<atomic<u32>, MAX_LEVEL_DISPATCHES + 1u>;
 var<workgroup> subtree_groups_added: atomic<u32>;
 
-// Raises the indirect arguments of level `level`'s dispatch (`dispatch_args`' rows, word-wise
-// maxima) to `args`.
-fn raise_row(level: u32, args: vec3<u32>) {
-    let at = SCHEDULE_ARGS + 3u * (level - 1u);
-    atomicMax(&schedule[at], args.x);
-    atomicMax(&schedule[at + 1u], args.y);
-    atomicMax(&schedule[at + 2u], args.z);
-}
-
 // Raises the arguments of level `level`'s dispatch (levels 1 ..= params.level_dispatches; the
 // one above them is climbed) for this workgroup's slots there: those it took together, from
 // `before` to `after`, and those its roots took one at a time, up to `alone_end` (0: none). Slots
@@ -126,7 +118,7 @@ fn raise_arguments(level: u32, before: u32, after: u32, alone_end: u32) {
     let needs_more = optimize_workgroups(after) != optimize_workgroups(before);
     let count = max(select(0u, after, needs_more), alone_end);
     if count != 0u {
-        raise_row(level, dispatch_args(optimize_workgroups(count)));
+        raise_level_arguments(level, optimize_workgroups(count));
     }
 }
 
@@ -139,7 +131,7 @@ fn raise_arguments(level: u32, before: u32, after: u32, alone_end: u32) {
 fn raise_subtree_arguments() {
     let added = atomicLoad(&subtree_groups_added);
     if added != 0u {
-        raise_row(1u, dispatch_args(atomicAdd(&schedule[SCHEDULE_SUBTREE_GROUPS], added) + added));
+        raise_level_arguments(1u, atomicAdd(&schedule[SCHEDULE_SUBTREE_GROUPS], added) + added);
     }
 }
 

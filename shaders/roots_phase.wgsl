@@ -33,6 +33,7 @@ const WORKGROUP: u32 = 256u;
 // Per internal node its depth mod phases + 1 with the stamp of the phase that published it
 // (`PHASE_STAMP`); another phase's stamp, or 0, reads as not known yet.
 @group(0) @binding(6) var<storage, read_write> depths: array<atomic<u32>>;
+#include "treelet_arguments.wgsl"
 
 // The stamp of phase k: k + 1 above the 24 bits of the depth residue + 1.
 const PHASE_STAMP: u32 = 1u << 24u;
@@ -45,16 +46,11 @@ var<workgroup> workgroup_roots: atomic<u32>;
 var<workgroup> workgroup_first: u32;
 
 // Raises the phase's treelets_optimize arguments to cover `treelets` treelets
-// (`optimize_workgroups` in `dispatch_args`' rows). Each word ends as the most that any count
-// raised it to, and one count's x times y covers it, so the final count is covered: a dispatch of
-// teams that turns lone past params.team_below keeps the teams' larger grid, whose extra
-// workgroups find no treelet.
+// (`optimize_workgroups`). Each word ends as the most that any count raised it to, and one
+// count's x times y covers it, so the final count is covered: a dispatch of teams that turns lone
+// past params.team_below keeps the teams' larger grid, whose extra workgroups find no treelet.
 fn raise_arguments(treelets: u32) {
-    let args = dispatch_args(optimize_workgroups(treelets));
-    let at = SCHEDULE_ARGS + 3u * (params.level - 1u);
-    atomicMax(&schedule[at], args.x);
-    atomicMax(&schedule[at + 1u], args.y);
-    atomicMax(&schedule[at + 2u], args.z);
+    raise_level_arguments(params.level, optimize_workgroups(treelets));
 }
 
 @compute @workgroup_size(WORKGROUP)

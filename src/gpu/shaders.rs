@@ -81,6 +81,10 @@ const INCLUDES: &[(&str, &str)] = &[
         include_str!("../../shaders/include/treelet_round.wgsl"),
     ),
     (
+        "treelet_arguments.wgsl",
+        include_str!("../../shaders/include/treelet_arguments.wgsl"),
+    ),
+    (
         "treelet_roots.wgsl",
         include_str!("../../shaders/include/treelet_roots.wgsl"),
     ),
