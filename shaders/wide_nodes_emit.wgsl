@@ -35,6 +35,11 @@ fn size_next_level(level: u32, first: u32, children_end: u32, lid: u32) {
     }
 }
 
+// The end of the internal children that emit_wave_node returned (first, count): 0 for none.
+fn allocated_end(children: vec2<u32>) -> u32 {
+    return select(0u, children.x + children.y, children.y > 0u);
+}
+
 fn open_next_level(level: u32, first: u32) {
     atomicStore(&next_level[record_word(level + 1u, 1u)], 1u);
     atomicStore(&next_level[record_word(level + 1u, 2u)], 1u);
@@ -69,7 +74,7 @@ fn main(
             var children_end = 0u;
             for (var wave = first; wave < end; wave += EMIT_WORKGROUP) {
                 let children = emit_wave_node(wave + lid, wave + lid < end, lid);
-                children_end = max(children_end, select(0u, children.x + children.y, children.y > 0u));
+                children_end = max(children_end, allocated_end(children));
             }
             if level == top {
                 size_next_level(top, end, children_end, lid);
@@ -96,7 +101,7 @@ fn main(
     var children_end = 0u;
     for (var wave = first + wid.x * EMIT_WORKGROUP; wave < end; wave += stride) {
         let children = emit_wave_node(wave + lid, wave + lid < end, lid);
-        children_end = max(children_end, select(0u, children.x + children.y, children.y > 0u));
+        children_end = max(children_end, allocated_end(children));
     }
     size_next_level(params.level, end, children_end, lid);
 }
