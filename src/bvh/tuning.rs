@@ -33,6 +33,11 @@ use crate::{Error, Result};
 /// ~46 partition tests deep instead of 966, at the cost of a warp per treelet. With overlapped
 /// rounds it applies to their dispatched waves.
 const TEAM_THRESHOLDS: [u32; 4] = [0, 256, 1024, 4096];
+/// The same for the phased rounds' phases, each of which holds the treelets of every level at its
+/// depths: thousands (CPU twin, the `phased` preset: conference 5,000-17,000 per phase,
+/// field-100k 1,000-6,000), so that the levels' thresholds would mostly leave every phase to lone
+/// invocations; u32::MAX: teams in every phase.
+const PHASE_TEAM_THRESHOLDS: [u32; 4] = [0, 2048, 8192, u32::MAX];
 /// The same for the climb's waves (`RoundSchedule::climb_team_below`), which its four teams take
 /// a treelet each at a time: waves of up to 4 treelets in one turn, of up to 8 in two (more lost
 /// on an H200 with the team DP's older form).
@@ -320,14 +325,18 @@ impl Dimension {
                     })
                 })
                 .to_vec(),
-            Dimension::TeamBelow => TEAM_THRESHOLDS
-                .map(|below| {
-                    rounds(RoundSchedule {
-                        team_below: Some(below),
-                        ..k
-                    })
+            Dimension::TeamBelow => if space.phased {
+                PHASE_TEAM_THRESHOLDS
+            } else {
+                TEAM_THRESHOLDS
+            }
+            .map(|below| {
+                rounds(RoundSchedule {
+                    team_below: Some(below),
+                    ..k
                 })
-                .to_vec(),
+            })
+            .to_vec(),
             Dimension::ClimbTeamBelow => CLIMB_TEAM_THRESHOLDS
                 .map(|below| {
                     rounds(RoundSchedule {
@@ -751,7 +760,7 @@ mod tests {
     };
 
     /// A build time with one best value per dimension: overlap 6 (else subtrees of 6 levels, of
-    /// width 128), the loop DP in the climb, teams below 1024 (in the climb below 5), 11
+    /// width 128), the loop DP in the climb, teams below 1024 (phases: 8192; in the climb below 5), 11
     /// dispatched levels, a phase's root slots taken per root, tiles of 16 keys per invocation,
     /// 14 wide levels dispatched.
     fn cost(b: BuildSchedule) -> f64 {
@@ -769,7 +778,7 @@ mod tests {
                 ms -= 0.3;
             }
         }
-        if s.team_below() == 1024 {
+        if s.team_below() == 1024 || s.team_below() == 8192 {
             ms -= 0.5;
         }
         if s.climb_team_below() == 5 {
@@ -879,8 +888,11 @@ mod tests {
                 && r.level_dispatches.is_none()
         }));
         assert!(timed.iter().any(|s| s.rounds.dp == Some(TreeletDp::Loop)));
+        // The phases' own team thresholds, teams in every phase among them.
+        assert!(timed.iter().any(|s| s.rounds.team_below == Some(u32::MAX)));
+        assert!(!timed.iter().any(|s| s.rounds.team_below == Some(1024)));
         let kept = tuned.schedule.rounds;
-        assert_eq!(kept.team_below(), 1024);
+        assert_eq!(kept.team_below(), 8192);
         assert_eq!(kept.root_slots, Some(RootSlots::Root));
         // `cost` rewards the loop form in the climb, whose form follows the DP's where unset: so
         // the loop DP is kept here, labelled without a climb's form.
