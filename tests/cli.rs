@@ -68,6 +68,31 @@ fn render_writes_a_png() {
     std::fs::remove_file(&out).ok();
 }
 
+/// `treelet` without arguments and without a display (the README's main job on a headless
+/// machine) renders the default scene to `treelet.png` in the working folder, its BVH built on
+/// the GPU by trbvh as in the viewer.
+#[test]
+fn main_job_without_a_display_renders_with_the_gpu_build() {
+    let folder = std::env::temp_dir().join(format!("treelet-cli-main-{}", std::process::id()));
+    std::fs::create_dir_all(&folder).unwrap();
+    let xdg = std::env::temp_dir().join("treelet-test-xdg");
+    std::fs::create_dir_all(&xdg).unwrap();
+    let result = std::process::Command::new(env!("CARGO_BIN_EXE_treelet"))
+        .current_dir(&folder)
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .env("XDG_RUNTIME_DIR", &xdg)
+        .env("RUST_LOG", "info")
+        .output()
+        .expect("binary runs");
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(result.status.success(), "{stderr}");
+    assert!(stderr.contains("trbvh n=7 r=3 build"), "{stderr}");
+    let image = image::open(folder.join("treelet.png")).unwrap();
+    assert_eq!((image.width(), image.height()), (640, 480));
+    std::fs::remove_dir_all(&folder).ok();
+}
+
 /// Runs `treelet bench` with `args`, which must succeed; its JSON lines.
 fn bench_records(args: &[&str]) -> Vec<serde_json::Value> {
     let args: Vec<&str> = ["bench"].iter().chain(args).copied().collect();

@@ -380,18 +380,19 @@ pub fn run(cli: Cli) -> Result<()> {
 }
 
 /// What `treelet` without arguments does: open the viewer when a display is available (DISPLAY or
-/// WAYLAND_DISPLAY set), otherwise render the default scene to `treelet.png`.
+/// WAYLAND_DISPLAY set), otherwise render the default scene to `treelet.png` with the viewer's
+/// builder, trbvh on the GPU (`render` alone builds with the CPU's sweep, a reference).
 fn default_command() -> Command {
     let has_display = ["DISPLAY", "WAYLAND_DISPLAY"]
         .iter()
         .any(|v| std::env::var_os(v).is_some_and(|s| !s.is_empty()));
-    let command = if has_display {
-        "view"
+    let args: &[&str] = if has_display {
+        &["treelet", "view"]
     } else {
         log::info!("no display (DISPLAY and WAYLAND_DISPLAY unset): rendering to treelet.png instead of opening the viewer");
-        "render"
+        &["treelet", "render", "--builder", "trbvh"]
     };
-    Cli::parse_from(["treelet", command])
+    Cli::parse_from(args)
         .command
         .expect("the default command parses")
 }
