@@ -760,9 +760,9 @@ mod tests {
     };
 
     /// A build time with one best value per dimension: overlap 6 (else subtrees of 6 levels, of
-    /// width 128), the loop DP in the climb, teams below 1024 (phases: 8192; in the climb below 5), 11
-    /// dispatched levels, a phase's root slots taken per root, tiles of 16 keys per invocation,
-    /// 14 wide levels dispatched.
+    /// width 128), the loop DP in the climb, teams below 1024 (phases: below 8192; in the climb
+    /// below 5), 11 dispatched levels, a phase's root slots taken per root, tiles of 16 keys per
+    /// invocation, 14 wide levels dispatched.
     fn cost(b: BuildSchedule) -> f64 {
         let s = b.rounds;
         let mut ms = 10.0;
