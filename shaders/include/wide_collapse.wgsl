@@ -1,7 +1,9 @@
 // Binary-to-wide conversion, one wide node per invocation (CPU twins: `WideBvh::from_binary` and
 // `WideBvh::from_binary_optimal`, src/bvh/wide/convert.rs; the kernels run it top-down:
 // wide_nodes_emit.wgsl level by level, then wide_nodes_finish.wgsl a subtree per invocation).
-// Wide node w is made from binary node `wide_sources[w].x`:
+// Wide node w is made from a binary node (the root from node 0; `wide_sources[w]` holds, for the
+// greedy collapse, that node's two children, which its parent's draft had loaded, so that a
+// level's draft loads them without first loading the node; for the optimal one the node itself):
 // 1. Children, by one of two collapses (the pipeline constant `WIDE_COLLAPSE`):
 //    - optimal: the split of 8 slots that costs_climb.wgsl chose for the binary node, each part
 //      expanded by its node's choices (collapse_choices.wgsl), left before right: Ylitie et al.'s
@@ -53,8 +55,9 @@ override WIDE_COLLAPSE: u32 = COLLAPSE_GREEDY;
 // Per reference, its position in the binary tree's `prim_indices` (triangles_gather.wgsl replaces
 // it with the triangle's index).
 @group(0) @binding(3) var<storage, read_write> wide_prims: array<u32>;
-// Binary node of each wide node (x; y unused here: wide_nodes_finish.wgsl keeps the link of its
-// walk there).
+// Per wide node but the root, where it comes from: its binary node's children (left, right) with
+// the greedy collapse, the binary node (x; y unused) with the optimal one. Read once, by the
+// node's draft: wide_nodes_finish.wgsl then keeps the link of its walk there.
 @group(0) @binding(4) var<storage, read_write> wide_sources: array<vec2<u32>>;
 // [0] wide nodes allocated, [1] references written, [2] capacity overflows.
 @group(0) @binding(5) var<storage, read_write> wide_counters: array<atomic<u32>>;
@@ -148,31 +151,51 @@ fn slot_scores(c: BvhNode, centre: vec3<f32>) -> array<vec4<f32>, 2> {
 }
 
 // A wide node before its children and references are allocated: the node (child_base and
-// prim_base 0), its internal children and references, and per slot the binary child's index
-// (internal) or first reference (leaf).
+// prim_base 0), its internal children and references, and per slot what its child's
+// `wide_sources` entry gets (internal: the binary child's children with the greedy collapse, the
+// binary child with the optimal one) or its first reference (leaf).
 struct WideDraft {
     node: WideNode,
     internal: u32,
     prims: u32,
-    slot_words: array<u32, 8>,
+    slot_words: array<vec2<u32>, 8>,
 }
 
-// The wide node made from binary node `source` (steps 1-3).
-fn draft_wide_node(source: u32) -> WideDraft {
+// The greedy collapse's binary node's children (x: left, y: right), or a binary node (x; the
+// optimal collapse), of wide node w's `wide_sources` entry; the root's from binary node 0, with
+// y = NO_SOURCE where that node is a leaf (a tree of one leaf).
+const NO_SOURCE: u32 = 0xffffffffu;
+
+fn wide_node_source(w: u32) -> vec2<u32> {
+    if w != 0u {
+        return wide_sources[w];
+    }
+    let root = nodes[0];
+    if (root.right_or_count & LEAF_FLAG) != 0u {
+        return vec2<u32>(0u, NO_SOURCE);
+    }
+    if WIDE_COLLAPSE == COLLAPSE_OPTIMAL {
+        return vec2<u32>(0u);
+    }
+    return vec2<u32>(root.left_or_first, root.right_or_count);
+}
+
+// The wide node made from `source` (`wide_node_source`; steps 1-3).
+fn draft_wide_node(source: vec2<u32>) -> WideDraft {
     // Written through `set_child` only, and read at indices the loops fix: no index a lane
     // computes (see the slots below).
     var child: array<BvhNode, 8>;
     var child_index: array<u32, 8>;
     var count = 0u;
-    let top = nodes[source];
-    if (top.right_or_count & LEAF_FLAG) != 0u {
+    if source.y == NO_SOURCE {
         // A tree of one leaf.
-        set_child(&child, &child_index, 0u, top, source);
+        set_child(&child, &child_index, 0u, nodes[0], 0u);
         count = 1u;
     } else if WIDE_COLLAPSE == COLLAPSE_OPTIMAL {
+        let top = nodes[source.x];
         // (binary node, slots) still to expand, the next on top: at most 8, as each holds a slot.
         var pending: array<vec2<u32>, 8>;
-        let k = wide_split(choices[source]);
+        let k = wide_split(choices[source.x]);
         pending[0] = vec2<u32>(top.right_or_count, 8u - k);
         pending[1] = vec2<u32>(top.left_or_first, k);
         var sp = 2u;
@@ -199,8 +222,8 @@ fn draft_wide_node(source: u32) -> WideDraft {
             }
         }
     } else {
-        set_child(&child, &child_index, 0u, nodes[top.left_or_first], top.left_or_first);
-        set_child(&child, &child_index, 1u, nodes[top.right_or_count], top.right_or_count);
+        set_child(&child, &child_index, 0u, nodes[source.x], source.x);
+        set_child(&child, &child_index, 1u, nodes[source.y], source.y);
         // Each child's area once, when it is loaded; -1 for a leaf or no child (never opened).
         var area = array<f32, 8>(openable_area(child[0]), openable_area(child[1]), -1.0, -1.0, -1.0, -1.0, -1.0, -1.0);
         count = 2u;
@@ -270,7 +293,7 @@ fn draft_wide_node(source: u32) -> WideDraft {
     var imask = 0u;
     var internal = 0u;
     var prims = 0u;
-    var slot_words: array<u32, 8>;
+    var slot_words: array<vec2<u32>, 8>;
     for (var j = 0u; j < 8u; j++) {
         if j >= count {
             continue;
@@ -293,7 +316,8 @@ fn draft_wide_node(source: u32) -> WideDraft {
             internal++;
         }
         // Written to every slot, kept in slot s: no array indexed by s.
-        let word = select(child_index[j], c.left_or_first, is_leaf);
+        let internal_source = select(vec2<u32>(child_index[j], 0u), vec2<u32>(c.left_or_first, c.right_or_count), WIDE_COLLAPSE == COLLAPSE_GREEDY);
+        let word = select(internal_source, vec2<u32>(c.left_or_first, 0u), is_leaf);
         for (var t = 0u; t < 8u; t++) {
             slot_words[t] = select(slot_words[t], word, t == s);
         }
@@ -314,10 +338,10 @@ fn commit_wide_node(w: u32, draft: WideDraft, prim_base: u32, child_base: u32) {
     var next_child = child_base;
     for (var s = 0u; s < 8u; s++) {
         if ((imask >> s) & 1u) != 0u {
-            wide_sources[next_child].x = draft.slot_words[s];
+            wide_sources[next_child] = draft.slot_words[s];
             next_child++;
         } else {
-            let first = draft.slot_words[s];
+            let first = draft.slot_words[s].x;
             let n = slot_byte(out.leaf_counts, s);
             for (var i = 0u; i < n; i++) {
                 wide_prims[next_prim + i] = first + i;
@@ -334,7 +358,7 @@ var<workgroup> wave_children: atomic<u32>;
 var<workgroup> wave_prims: atomic<u32>;
 var<workgroup> wave_bases: vec2<u32>;
 
-// Emits wide node `w` if `emits` (from binary node `wide_sources[w].x`, the root from node 0), in a
+// Emits wide node `w` if `emits` (from its `wide_sources` entry, the root from node 0), in a
 // wave with the workgroup's other invocations: the wave's children and references are allocated
 // with one device atomic per counter, not one per node. Returns w's internal children (first wide
 // node, count; count 0: none, or not emitted). Every invocation of the workgroup calls it
@@ -344,7 +368,7 @@ fn emit_wave_node(w: u32, emits: bool, lid: u32) -> vec2<u32> {
     var child_offset = 0u;
     var prim_offset = 0u;
     if emits {
-        draft = draft_wide_node(select(wide_sources[w].x, 0u, w == 0u));
+        draft = draft_wide_node(wide_node_source(w));
         child_offset = atomicAdd(&wave_children, draft.internal);
         prim_offset = atomicAdd(&wave_prims, draft.prims);
     }
