@@ -4,7 +4,7 @@
 // Each step every busy invocation emits one node (a wave: one device atomic per counter
 // allocates its children and references), until none is busy. An invocation walks its subtree
 // depth-first without a stack: a node with internal children keeps its parent and the end of its
-// siblings in its `wide_sources` entry (its binary source is no longer needed; one load gives a
+// siblings in its `wide_sources` entry (its source is no longer needed; one load gives a
 // step up both, where the parent's link and then the parent's node took two round trips to
 // memory), and siblings are consecutive. To
 // keep the invocations busy it gives a node's children but the last to a pool of subtree roots in
