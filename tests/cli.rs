@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{assert_clean_failure, run_treelet as treelet};
+use common::{assert_clean_failure, run_treelet as treelet, treelet_command};
 use treelet::bvh::treelet::RoundSchedule;
 
 #[test]
@@ -75,13 +75,10 @@ fn render_writes_a_png() {
 fn main_job_without_a_display_renders_with_the_gpu_build() {
     let folder = std::env::temp_dir().join(format!("treelet-cli-main-{}", std::process::id()));
     std::fs::create_dir_all(&folder).unwrap();
-    let xdg = std::env::temp_dir().join("treelet-test-xdg");
-    std::fs::create_dir_all(&xdg).unwrap();
-    let result = std::process::Command::new(env!("CARGO_BIN_EXE_treelet"))
+    let result = treelet_command(&[])
         .current_dir(&folder)
         .env_remove("DISPLAY")
         .env_remove("WAYLAND_DISPLAY")
-        .env("XDG_RUNTIME_DIR", &xdg)
         .env("RUST_LOG", "info")
         .output()
         .expect("binary runs");

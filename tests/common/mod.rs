@@ -265,16 +265,20 @@ pub fn missing_shared_scene(what: impl std::fmt::Display) {
     );
 }
 
+/// The `treelet` binary with `args` and a private XDG_RUNTIME_DIR, to run.
+#[cfg(feature = "app")]
+pub fn treelet_command(args: &[&str]) -> std::process::Command {
+    let xdg = std::env::temp_dir().join("treelet-test-xdg");
+    std::fs::create_dir_all(&xdg).unwrap();
+    let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_treelet"));
+    command.args(args).env("XDG_RUNTIME_DIR", &xdg);
+    command
+}
+
 /// Runs the `treelet` binary with `args` (and a private XDG_RUNTIME_DIR).
 #[cfg(feature = "app")]
 pub fn run_treelet(args: &[&str]) -> std::process::Output {
-    let xdg = std::env::temp_dir().join("treelet-test-xdg");
-    std::fs::create_dir_all(&xdg).unwrap();
-    std::process::Command::new(env!("CARGO_BIN_EXE_treelet"))
-        .args(args)
-        .env("XDG_RUNTIME_DIR", &xdg)
-        .output()
-        .expect("binary runs")
+    treelet_command(args).output().expect("binary runs")
 }
 
 /// `treelet args` fails with a message containing `expected`, and without a panic.
