@@ -7,7 +7,7 @@
 # invocations per treelet in the dispatched levels, in the overlapped rounds' dispatched waves and
 # in the climb, each threshold beside none ("teams"; TEAM_SCENES), the treelet rounds' lowest
 # levels per subtree at each height beside by level ("subtrees"), every build with wgpu's indirect validation on and off ("indirect"), the
-# binary-vs-wide table ("layouts"), build scaling with each GPU builder's schedule
+# binary-vs-wide table ("layouts"), the same on the stress scenes ("stress"), build scaling with each GPU builder's schedule
 # tuned ("scaling"), the round schedules each fixed beside the default and the tuned one (the
 # DP's forms in the dispatched levels and the climb, the overlapped rounds, the team thresholds
 # TEAMS and CLIMB_TEAMS, and levels dispatched where LEVELS is set: "schedules"), the changes of scripts/variants/
@@ -41,7 +41,7 @@ save() { tar -C $res -czf "$final/results.tar.gz" .; }
 step() {
   local name=$1 cap=$2 left
   shift 2
-  case " ${STEPS:-tests kernelstats phases teams subtrees indirect layouts scaling schedules variants widelevels probe profile kernels} " in
+  case " ${STEPS:-tests kernelstats phases teams subtrees indirect layouts stress scaling schedules variants widelevels probe profile kernels} " in
     *" $name "*) ;;
     *) return ;;
   esac
@@ -232,6 +232,9 @@ step indirect 150 bash -c indirect
 # The trace first: both layouts on every scene (their ray counts must agree), then the variants.
 step layouts 80 env SCENES="conference crytek_sponza sibenik lost_empire armadillo" OPTIMAL_SCENES="conference lost_empire" \
   REPEATS=11 bash scripts/gpu-layouts.sh
+# The same table on the stress scenes of the trace issue's OptiX table (README, "Scenes").
+step stress 60 env NAME=stress SCENES="stacked grass hairball stadium" OPTIMAL_SCENES=" " \
+  REPEATS=11 bash scripts/gpu-layouts.sh
 # Build scaling with every treelet builder's schedule tuned (bench's default on a GPU; README,
 # "Schedule tuning"): the build times to report and the schedule each scene keeps.
 step scaling 130 bash -c scaling
@@ -330,7 +333,7 @@ for name in ("scaling.jsonl", "baseline.jsonl"):
                                               for t in tuning["trials"] if t["other_tree"] or t.get("error"))
                      if any(t["other_tree"] or t.get("error") for t in tuning["trials"]) else ""))
 PY
-for f in kernelstats probe variants layouts profile kernels schedules; do
+for f in kernelstats probe variants layouts stress profile kernels schedules; do
   echo "--- $f (tail)"
   tail -n 40 $res/$f.txt 2>/dev/null
 done

@@ -8,24 +8,27 @@
 # table is printed last, after one of the SAH-optimal wide collapse (`--wide-collapse optimal`, its
 # program on the GPU) against the greedy one (the default) for trbvh on OPTIMAL_SCENES: trace
 # speed, nodes and the time of the build stage "wide".
-# SCENES overrides the scene list, W H SPP REPEATS the workload; with
+# SCENES overrides the scene list, W H SPP REPEATS the workload, NAME the JSON file's name
+# (default layouts: $OUT/NAME.jsonl); with
 # TREELET set to a treelet binary it runs that one here instead (a dry run, e.g. on lavapipe:
 # TREELET=target/release/treelet SCENES=cornell W=64 H=64 SPP=1 REPEATS=1 bash scripts/gpu-layouts.sh).
 set -u
 . scripts/gpu-env.sh
-: > "$out/layouts.jsonl"
+json="$out/${NAME:-layouts}.jsonl"
+log="$out/${NAME:-layouts}.log"
+: > "$json"
 for s in ${SCENES:-conference crytek_sponza sibenik lost_empire armadillo dabrovic_sponza field:707}; do
   timeout 150 "$bin" bench --scene "$s" --builder lbvh,trbvh,trbvh-split --layout binary,wide --tune-schedule off \
-    --width "${W:-1920}" --height "${H:-1080}" --spp "${SPP:-4}" --repeats "${REPEATS:-21}" >> "$out/layouts.jsonl" 2>> "$out/layouts.log" \
-    || echo "$s: exit $? (see layouts.log)"
+    --width "${W:-1920}" --height "${H:-1080}" --spp "${SPP:-4}" --repeats "${REPEATS:-21}" >> "$json" 2>> "$log" \
+    || echo "$s: exit $? (see $log)"
 done
 # The SAH-optimal collapse against the greedy one, both converted on the GPU, trbvh.
 for s in ${OPTIMAL_SCENES:-conference crytek_sponza lost_empire}; do
   timeout 100 "$bin" bench --scene "$s" --builder trbvh --layout wide --wide-collapse optimal --tune-schedule off \
-    --width "${W:-1920}" --height "${H:-1080}" --spp "${SPP:-4}" --repeats "${REPEATS:-21}" >> "$out/layouts.jsonl" 2>> "$out/layouts.log" \
-    || echo "$s optimal collapse: exit $? (see layouts.log)"
+    --width "${W:-1920}" --height "${H:-1080}" --spp "${SPP:-4}" --repeats "${REPEATS:-21}" >> "$json" 2>> "$log" \
+    || echo "$s optimal collapse: exit $? (see $log)"
 done
-python3 - "$out/layouts.jsonl" <<'PY'
+python3 - "$json" <<'PY'
 import json, sys
 rows = [json.loads(l) for l in open(sys.argv[1]) if l.startswith("{")]
 optimal = [r for r in rows if r.get("wide_collapse") == "optimal"]

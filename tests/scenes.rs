@@ -1,4 +1,5 @@
-//! Integration tests of scene loading through the public API: every registered built-in loads,
+//! Integration tests of scene loading through the public API: every registered built-in loads
+//! (the stress scenes with their exact triangle counts),
 //! shared scenes load by name with the triangle counts of the shared README, OBJ files load by
 //! path, and bad input (missing, malformed, empty, non-finite, degenerate files, unknown names)
 //! gives the documented error or policy, never a panic.
@@ -8,7 +9,11 @@ mod common;
 use common::missing_shared_scene;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
-use treelet::scene::{builtin_names, load_obj, load_scene, shared_scenes_dir, Scene, SCENES};
+use treelet::scene::{
+    builtin_names, grass_blades_triangle_count, hairball_triangle_count, load_obj, load_scene,
+    shared_scenes_dir, stacked_duplicates_triangle_count, teapot_in_stadium_triangle_count, Scene,
+    SCENES,
+};
 use treelet::Error;
 
 /// A fresh file under the system temp directory with `text` in it.
@@ -76,6 +81,22 @@ fn every_builtin_loads() {
         .triangles
         .len();
     assert!((90_000..=110_000).contains(&n), "{n}");
+}
+
+#[test]
+fn stress_scenes_load_by_name_with_their_counts() {
+    for (name, count) in [
+        ("stacked", stacked_duplicates_triangle_count(80)),
+        ("grass", grass_blades_triangle_count(50_000)),
+        ("hairball", hairball_triangle_count(3_000)),
+        ("stadium", teapot_in_stadium_triangle_count(16)),
+    ] {
+        let scene = load_scene(name).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(scene.name, name);
+        // Sanitizing dropped nothing.
+        assert_eq!(scene.triangles.len(), count, "{name}");
+        assert_sane(&scene);
+    }
 }
 
 #[test]

@@ -6,7 +6,7 @@
 //! collapses (greedy, the default, and SAH-optimal) are checked; the optimal one makes fewer
 //! nodes of a lower wide SAH, and a tree made on the CPU traces the same hits once uploaded. The
 //! path tracer follows the same paths through both layouts of a deep scene (its ray count and
-//! image brightness). A tree deeper than a traversal's stack is an error, not a wrong hit.
+//! image brightness). Small versions of the stress scenes convert and trace as the others do. A tree deeper than a traversal's stack is an error, not a wrong hit.
 
 mod common;
 
@@ -27,7 +27,9 @@ use treelet::bvh::{
 use treelet::device::{Geometry, Tree, WideTree};
 use treelet::geometry::{Aabb, Hit, Ray};
 use treelet::gpu::read_buffer;
-use treelet::scene::{load_scene, Scene, Triangle};
+use treelet::scene::{
+    grass_blades, hairball, load_scene, stacked_duplicates, teapot_in_stadium, Scene, Triangle,
+};
 use treelet::trace::{any_hits_wide, closest_hits, closest_hits_wide, PathTracer, RenderSettings};
 use treelet::Error;
 
@@ -283,6 +285,41 @@ fn wide_hits_equal_brute_force() {
             convert_wide(&geometry, &mut tree, collapse);
             let hits = closest_hits_wide(gpu(), &geometry, &tree, &plain).unwrap();
             assert_hits_match(&scene.triangles, &rays, &hits);
+        }
+    }
+}
+
+/// Small versions of the stress scenes (overlapping duplicates, thin grass blades, a hairball of
+/// thin strands, a teapot in a stadium 500 times its size): every GPU builder's tree converts as
+/// its CPU twin does into a valid wide tree, and both layouts trace the brute-force hits, closest
+/// and any.
+#[test]
+fn stress_scenes_convert_like_the_cpu_twin_and_trace_brute_force_hits() {
+    let scenes = [
+        stacked_duplicates(6),
+        grass_blades(2_000),
+        hairball(100),
+        teapot_in_stadium(2),
+    ];
+    for (seed, scene) in scenes.iter().enumerate() {
+        let rays = test_rays(&scene.triangles, 150, seed as u64 + 40);
+        let plain: Vec<Ray> = rays.iter().map(|(_, r)| *r).collect();
+        let oracle = oracle_hits(&scene.triangles, &rays);
+        for builder in [
+            Builder::Lbvh,
+            Builder::Trbvh(TreeletSettings::BALANCED),
+            split_builder(),
+        ] {
+            check_conversion(scene, builder, WideCollapse::Greedy, Spread::default());
+            let (geometry, tree) =
+                build_wide(scene, builder, WideCollapse::Greedy, Spread::default());
+            let who = format!("{} on {}", builder.label(), scene.name);
+            let binary = closest_hits(gpu(), &geometry, &tree, &plain).unwrap();
+            let ties = assert_hits_match(&scene.triangles, &rays, &binary);
+            let wide = closest_hits_wide(gpu(), &geometry, &tree, &plain).unwrap();
+            assert_hits_match(&scene.triangles, &rays, &wide);
+            assert_any_hits_match(&who, &geometry, &tree, &plain, &oracle);
+            println!("{who}: {} rays, {ties} ties", rays.len());
         }
     }
 }

@@ -1,7 +1,7 @@
 //! Scenes: triangles with material ids, materials (diffuse albedo + emission), point lights, a
 //! camera and a sky.
-//! Sources: OBJ files (`obj`), procedural built-ins (`procedural`), looked up by name or path in
-//! `registry`. Every scene passes through `sanitize` (the documented bad-geometry policy).
+//! Sources: OBJ files (`obj`), procedural built-ins (`procedural`; the stress scenes of the trace
+//! issue's table, `stress`), looked up by name or path in `registry`. Every scene passes through `sanitize` (the documented bad-geometry policy).
 
 mod bart;
 mod camera;
@@ -10,6 +10,7 @@ mod obj;
 mod procedural;
 mod registry;
 mod sanitize;
+mod stress;
 
 pub use bart::{BartScene, CONE_SIDES};
 pub use camera::Camera;
@@ -17,6 +18,11 @@ pub use obj::load_obj;
 pub use procedural::{cornell_box, tessellated_field};
 pub use registry::{builtin_names, load_scene, shared_scenes_dir, SceneEntry, SCENES};
 pub use sanitize::{sanitize, SanitizeReport};
+pub use stress::{
+    grass_blades, grass_blades_triangle_count, hairball, hairball_triangle_count,
+    stacked_duplicates, stacked_duplicates_triangle_count, teapot_in_stadium,
+    teapot_in_stadium_triangle_count,
+};
 
 use crate::geometry::Aabb;
 use bytemuck::{Pod, Zeroable};

@@ -2,7 +2,10 @@
 //! built-ins and the OBJ files of the shared scenes folder), and `load_scene`, which resolves a
 //! name or an OBJ path and applies the bad-geometry policy (`sanitize`) to the result.
 
-use super::{cornell_box, load_obj, sanitize, tessellated_field, Camera, Scene};
+use super::{
+    cornell_box, grass_blades, hairball, load_obj, sanitize, stacked_duplicates, teapot_in_stadium,
+    tessellated_field, Camera, Scene,
+};
 use crate::{Error, Result};
 use glam::Vec3;
 use std::path::{Path, PathBuf};
@@ -64,6 +67,22 @@ fn field_10k() -> Scene {
     tessellated_field(67)
 }
 
+fn stacked() -> Scene {
+    stacked_duplicates(80)
+}
+
+fn grass() -> Scene {
+    grass_blades(50_000)
+}
+
+fn hairball_300k() -> Scene {
+    hairball(3_000)
+}
+
+fn stadium() -> Scene {
+    teapot_in_stadium(16)
+}
+
 const fn shared(path: &'static str) -> SceneSource {
     SceneSource::Shared { path, camera: None }
 }
@@ -105,6 +124,28 @@ pub static SCENES: &[SceneEntry] = &[
         name: "field-10k",
         description: "procedural terrain with objects, 10,162 triangles",
         source: SceneSource::Builtin(field_10k),
+    },
+    SceneEntry {
+        name: "stacked",
+        description:
+            "procedural stress scene: 80 overlapping copies of a sphere, 102,402 triangles",
+        source: SceneSource::Builtin(stacked),
+    },
+    SceneEntry {
+        name: "grass",
+        description: "procedural stress scene: 50,000 thin grass blades, 250,002 triangles",
+        source: SceneSource::Builtin(grass),
+    },
+    SceneEntry {
+        name: "hairball",
+        description:
+            "procedural stress scene: 3,000 thin strands tangled in a ball, 300,000 triangles",
+        source: SceneSource::Builtin(hairball_300k),
+    },
+    SceneEntry {
+        name: "stadium",
+        description: "procedural stress scene: a detailed teapot in a stadium, 205,186 triangles",
+        source: SceneSource::Builtin(stadium),
     },
     SceneEntry {
         name: "cornell_box",
@@ -342,6 +383,10 @@ mod tests {
             "lost_empire",
             "buddha",
             "buddha_scans",
+            "stacked",
+            "grass",
+            "hairball",
+            "stadium",
         ] {
             assert!(names.contains(&required), "{required} missing");
         }
@@ -353,6 +398,10 @@ mod tests {
             ("cornell", 36, 36),
             ("field-10k", 9_000, 11_000),
             ("field-100k", 90_000, 110_000),
+            ("stacked", 100_000, 105_000),
+            ("grass", 245_000, 255_000),
+            ("hairball", 295_000, 305_000),
+            ("stadium", 198_000, 210_000),
         ] {
             let scene = load_scene(name).expect(name);
             assert_eq!(scene.name, name);
