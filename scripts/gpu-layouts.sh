@@ -42,10 +42,13 @@ for o in optimal:
               f" {(o['mrays_per_s'] or 0) / (g['mrays_per_s'] or 1):15.2f}"
               f" {g['nodes']:>12}/{o['nodes']}"
               f" {g['stages_ms'].get('wide') or 0:10.2f}/{o['stages_ms'].get('wide') or 0:.2f}")
+def steps(r, key):
+    # The traversal steps per ray of the same rays (bench's counting trace).
+    return f"{r['steps'][key]:.1f}" if r.get("steps") else "-"
 runs = {}
 for r in rows:
     runs.setdefault((r["scene"], r["builder"]), {})[r["layout"]] = r
-print("scene            builder      build ms  wide ms  disp  wide levels/disp  binary Mrays/s  wide Mrays/s  wide/binary  bytes w/b")
+print("scene            builder      build ms  wide ms  disp  wide levels/disp  binary Mrays/s  wide Mrays/s  wide/binary  bytes w/b  nodes/ray b/w  tris/ray b/w")
 for (scene, builder), l in runs.items():
     b, w = l.get("binary"), l.get("wide")
     if not (b and w):
@@ -54,7 +57,9 @@ for (scene, builder), l in runs.items():
     print(f"{scene[-16:]:16} {builder:11} {b['build_ms']:9.2f} {w['stages_ms'].get('wide') or 0:8.2f}"
           f" {b['dispatches']:5} {w.get('wide_levels') or 0:8}/{w['stages_dispatches'].get('wide') or 0:<8}"
           f" {b['mrays_per_s'] or 0:15.1f} {w['mrays_per_s'] or 0:13.1f}"
-          f" {ratio:12.2f} {w['tree_bytes'] / b['tree_bytes']:10.2f}")
+          f" {ratio:12.2f} {w['tree_bytes'] / b['tree_bytes']:10.2f}"
+          f" {steps(b, 'nodes_per_ray')}/{steps(w, 'nodes_per_ray')}"
+          f" {steps(b, 'triangles_per_ray')}/{steps(w, 'triangles_per_ray')}")
     # Both layouts trace the same paths: their ray counts agree but for ties (an H200 once counted
     # 5 % of crytek_sponza's rays through the wide layout, and its Mrays/s meant nothing).
     if abs(w["rays"] - b["rays"]) > 0.002 * b["rays"]:

@@ -9,6 +9,7 @@
 @group(0) @binding(3) var<storage, read> nodes: array<BvhNode>;
 @group(0) @binding(4) var<storage, read> prim_indices: array<u32>;
 @group(0) @binding(5) var<storage, read_write> accum: array<vec4<f32>>;
-// Per dispatch (counter_slot): [2 slot]: rays traced, [2 slot + 1]: stack overflows
+// Per dispatch (counter_slot): [2 slot]: rays traced, [2 slot + 1]: stack overflows; with
+// COUNT_STEPS, [TRACE_STEPS_AT + 4 slot ..]: internal nodes and triangles tested, 64 bits each
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>>;
 @group(0) @binding(7) var<storage, read> lights: array<PointLight>;

@@ -8,5 +8,5 @@
 @group(0) @binding(3) var<storage, read> prim_indices: array<u32>;
 @group(0) @binding(4) var<storage, read> rays: array<Ray>;
 @group(0) @binding(5) var<storage, read_write> hits: array<Hit>;
-// [0]: stack overflows
+// [0]: stack overflows; with COUNT_STEPS, [1 + 2 i] and [2 + 2 i]: ray i's steps
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>>;

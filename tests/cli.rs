@@ -134,7 +134,7 @@ fn quick_bench(builders: &str, extra: &[&str]) -> Vec<serde_json::Value> {
 }
 
 /// `bench` prints one JSON line per builder, GPU builders first, each with the min/median/max of
-/// its timed builds and traces and the warm-up it had.
+/// its timed builds and traces, the warm-up it had and the traversal steps of its rays.
 #[test]
 fn bench_prints_json_lines() {
     let records = bench_records(&[
@@ -199,6 +199,18 @@ fn bench_prints_json_lines() {
         let trace_warmup = &record["trace_warmup"];
         assert!(trace_warmup["runs"].as_u64().unwrap() >= 1, "{record}");
         assert!(trace_warmup["ms"].as_f64().unwrap() >= 50.0, "{record}");
+        // The traversal steps of the same rays, counted.
+        let steps = &record["steps"];
+        let rays = record["rays"].as_f64().unwrap();
+        let nodes = steps["nodes"].as_u64().unwrap();
+        assert!(
+            nodes > 0 && steps["triangles"].as_u64().unwrap() > 0,
+            "{record}"
+        );
+        assert_eq!(
+            steps["nodes_per_ray"].as_f64().unwrap(),
+            nodes as f64 / rays
+        );
     }
     let gpu_warmup = &records[0]["build_warmup"];
     assert!(gpu_warmup["ms"].as_f64().unwrap() >= 50.0, "{gpu_warmup}");

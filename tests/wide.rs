@@ -6,7 +6,8 @@
 //! collapses (greedy, the default, and SAH-optimal) are checked; the optimal one makes fewer
 //! nodes of a lower wide SAH, and a tree made on the CPU traces the same hits once uploaded. The
 //! path tracer follows the same paths through both layouts of a deep scene (its ray count and
-//! image brightness). Small versions of the stress scenes convert and trace as the others do. A tree deeper than a traversal's stack is an error, not a wrong hit.
+//! image brightness). Small versions of the stress scenes convert and trace as the others do.
+//! Counting the traversal steps leaves the trace as it was; the wide layout takes far fewer. A tree deeper than a traversal's stack is an error, not a wrong hit.
 
 mod common;
 
@@ -30,7 +31,10 @@ use treelet::gpu::read_buffer;
 use treelet::scene::{
     grass_blades, hairball, load_scene, stacked_duplicates, teapot_in_stadium, Scene, Triangle,
 };
-use treelet::trace::{any_hits_wide, closest_hits, closest_hits_wide, PathTracer, RenderSettings};
+use treelet::trace::{
+    any_hits_wide, closest_hits, closest_hits_wide, closest_hits_with_steps, PathTracer,
+    RenderSettings,
+};
 use treelet::Error;
 
 /// The tree as a sequence independent of node and reference-block numbering: each node's frame,
@@ -654,6 +658,70 @@ fn both_layouts_trace_the_same_paths_on_a_deep_scene() {
         mean_off <= 0.01,
         "mean brightness: binary {binary_mean}, wide {wide_mean}"
     );
+}
+
+/// Counting the traversal steps changes neither the paths nor the image (the counting trace
+/// traces the same rays to the same pixels), and the wide layout visits far fewer nodes than the
+/// binary one, in paths and in ray queries (whose hits stay the brute-force ones).
+#[test]
+fn traversal_steps_are_counted_without_changing_the_trace() {
+    let scene = load_scene("field-10k").unwrap();
+    let (geometry, tree) = build_wide(
+        &scene,
+        Builder::Trbvh(TreeletSettings::BALANCED),
+        WideCollapse::Greedy,
+        Spread::default(),
+    );
+    let mut path_steps = Vec::new();
+    for layout in [Layout::Binary, Layout::Wide] {
+        let settings = RenderSettings {
+            width: 48,
+            height: 32,
+            max_depth: 4,
+            exposure: 1.0,
+            layout,
+        };
+        let mut tracer = PathTracer::new(gpu(), settings).unwrap();
+        let trace = |tracer: &mut PathTracer| {
+            tracer.reset();
+            let stats = tracer
+                .trace(gpu(), &geometry, &tree, &scene.camera, scene.sky, 2)
+                .unwrap();
+            (stats, tracer.read_image(gpu()).unwrap())
+        };
+        let (plain, plain_image) = trace(&mut tracer);
+        tracer.set_count_steps(true);
+        let (counted, counted_image) = trace(&mut tracer);
+        assert_eq!(plain.steps, None);
+        assert_eq!(counted.rays, plain.rays, "{layout:?}");
+        assert!(
+            counted_image == plain_image,
+            "{layout:?}: the image changed"
+        );
+        let steps = counted.steps.expect("counted");
+        assert!(
+            steps.nodes >= plain.rays / 2 && steps.triangles > 0,
+            "{steps:?}"
+        );
+        println!("{layout:?}: {} rays, {steps:?}", counted.rays);
+        path_steps.push(steps);
+    }
+    assert!(
+        path_steps[1].nodes * 2 < path_steps[0].nodes,
+        "{path_steps:?}"
+    );
+
+    let rays = test_rays(&scene.triangles, 200, 70);
+    let plain: Vec<Ray> = rays.iter().map(|(_, r)| *r).collect();
+    let mut query_nodes = Vec::new();
+    for layout in [Layout::Binary, Layout::Wide] {
+        let (hits, steps) =
+            closest_hits_with_steps(gpu(), &geometry, &tree, &plain, layout).unwrap();
+        assert_hits_match(&scene.triangles, &rays, &hits);
+        assert_eq!(steps.len(), plain.len());
+        query_nodes.push(steps.iter().map(|s| s.nodes).sum::<u64>());
+    }
+    assert!(query_nodes[1] * 2 < query_nodes[0], "{query_nodes:?}");
 }
 
 /// `wide` with its nodes and reference blocks numbered depth first (the conversion numbers them

@@ -36,8 +36,9 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_ze
     let boxes = box_ray(origin, dir);
     let root = nodes[0];
     if box_entry(root.min, root.max, boxes, t_min, best.t) == NO_ENTRY {
-        return TraceResult(best, 0u, 0u);
+        return TraceResult(best, 0u, 0u, vec2<u32>(0u));
     }
+    var steps = vec2<u32>(0u);
     var sp = 0u;
     var index = 0u;
     loop {
@@ -46,10 +47,12 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_ze
         if (node.right_or_count & LEAF_FLAG) != 0u {
             let first = node.left_or_first;
             intersect_leaf(first, first + (node.right_or_count & ~LEAF_FLAG), test, t_min, &best, &best_material);
+            steps.y += node.right_or_count & ~LEAF_FLAG;
             if any_hit && best.tri != MISS {
-                return TraceResult(best, overflow, best_material);
+                return TraceResult(best, overflow, best_material, steps);
             }
         } else {
+            steps.x++;
             let left = nodes[node.left_or_first];
             let right = nodes[node.right_or_count];
             let tl = box_entry(left.min, left.max, boxes, t_min, best.t);
@@ -99,5 +102,5 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_ze
             }
         }
     }
-    return TraceResult(best, overflow, best_material);
+    return TraceResult(best, overflow, best_material, steps);
 }

@@ -9,7 +9,9 @@
 // Whitted-style light convention, see `PointLight`). Radiance sums accumulate progressively in
 // `accum` (rgb sum, sample count in w). Every traced ray, bounce and shadow, is counted: each
 // invocation adds its rays to a workgroup tally, and the workgroup's last invocation to finish
-// adds the total to the dispatch's counter (one global atomic per workgroup, no barrier).
+// adds the total to the dispatch's counter (one global atomic per workgroup, no barrier). With
+// COUNT_STEPS each invocation also adds its traversals' steps (internal nodes, triangles) to the
+// dispatch's 64-bit counts after all the dispatches' ray counters (`TRACE_STEPS_AT`).
 #include "random.wgsl"
 
 struct TraceParams {
@@ -59,6 +61,14 @@ fn sky_radiance(dir: vec3<f32>) -> vec3<f32> {
     return params.sky * mix(0.35, 1.0, max(h, 0.0)) * select(0.6, 1.0, h >= 0.0);
 }
 
+// Adds `value` to the 64-bit count whose low word is counters[low] and high word the next.
+fn add_to_count(low: u32, value: u32) {
+    let before = atomicAdd(&counters[low], value);
+    if before > 0xffffffffu - value {
+        atomicAdd(&counters[low + 1u], 1u);
+    }
+}
+
 // Cosine-weighted direction around the unit normal n (Duff et al. 2017 orthonormal basis).
 fn cosine_direction(n: vec3<f32>, rng: ptr<function, u32>) -> vec3<f32> {
     let r1 = random_f32(rng);
@@ -104,6 +114,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
     let coords = wid.xy * 8u + block;
     var rays = 0u;
     var overflows = 0u;
+    var steps = vec2<u32>(0u);
     // One traversal stack for all of this invocation's rays (zero-filled once).
     var stack: TraversalStack;
     if coords.x < params.width && coords.y < params.height && params.samples != 0u {
@@ -123,6 +134,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
             let traced = traverse(path.origin, path.dir, 0.0, 3.0e38, params.opaque_zero, false, &stack);
             rays++;
             overflows += traced.overflow;
+            steps += traced.steps;
             let hit = traced.hit;
             path.depth++;
             var ended = path.depth == params.max_depth;
@@ -151,6 +163,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
                         let shadow = traverse(path.origin, to_light / distance, 0.0, distance, params.opaque_zero, true, &stack);
                         rays++;
                         overflows += shadow.overflow;
+                        steps += shadow.steps;
                         if shadow.hit.tri == MISS {
                             path.radiance += path.throughput * light.intensity * cos_theta;
                         }
@@ -173,6 +186,11 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
     }
     if overflows != 0u {
         atomicAdd(&counters[2u * params.counter_slot + 1u], overflows);
+    }
+    if COUNT_STEPS != 0u {
+        let at = TRACE_STEPS_AT + 4u * params.counter_slot;
+        add_to_count(at, steps.x);
+        add_to_count(at + 2u, steps.y);
     }
     let mine = (rays << TALLY_SHIFT) | 1u;
     let tally = atomicAdd(&workgroup_tally, mine) + mine;

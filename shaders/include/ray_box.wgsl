@@ -45,5 +45,13 @@ struct TraceResult {
     // The hit triangle's material (0 on a miss), kept from the triangle test's loads: a path
     // tracer's load of the material then waits for no load of the triangle.
     material: u32,
+    // The traversal's steps: the internal nodes whose children's boxes it tested (binary: two
+    // boxes, wide: eight) and the triangles it tested. Kept in registers; a kernel writes them
+    // out only with COUNT_STEPS, so that without it the compiler drops the counting.
+    steps: vec2<u32>,
 }
+
+// 1: the kernel writes out its traversals' steps (`TraceResult::steps`; `trace::TraversalSteps`),
+// 0: a pipeline that counts nothing.
+override COUNT_STEPS: u32 = 0u;
 

@@ -159,10 +159,12 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_ze
     let near_is_lo = boxes.inv_dir >= vec3<f32>(0.0);
     let octant_flip = 7u ^ (select(0u, 1u, dir.x < 0.0) | select(0u, 2u, dir.y < 0.0) | select(0u, 4u, dir.z < 0.0));
     var overflow = 0u;
+    var steps = vec2<u32>(0u);
     var sp = 0u;
     var index = 0u;
     loop {
         let node = load_wide_node(index);
+        steps.x++;
         let scale = vec3<f32>(
             exponent_scale(node.exponents & 0xffu),
             exponent_scale((node.exponents >> 8u) & 0xffu),
@@ -196,9 +198,11 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_ze
                 continue;
             }
             let first = leaf_first(node, slot);
-            intersect_wide_leaf(first, first + slot_byte(node.leaf_counts, slot), test, t_min, &best, &best_material);
+            let count = slot_byte(node.leaf_counts, slot);
+            intersect_wide_leaf(first, first + count, test, t_min, &best, &best_material);
+            steps.y += count;
             if any_hit && best.tri != MISS {
-                return TraceResult(best, overflow, best_material);
+                return TraceResult(best, overflow, best_material, steps);
             }
         }
         // The internal children hit. One: descend into it, its offset from child_base being the
@@ -257,5 +261,5 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32, opaque_ze
             }
         }
     }
-    return TraceResult(best, overflow, best_material);
+    return TraceResult(best, overflow, best_material, steps);
 }

@@ -220,6 +220,7 @@ fn decode(
                 trace_ms: stage("trace").and_then(|s| s.ms),
                 wall_ms: record.wall_ms,
                 samples: recorded.samples,
+                steps: None,
             };
             (Some(stats), overflows)
         }

@@ -27,6 +27,7 @@ pub use nodes_refit::{derive_refit_links, parents_and_leaves, NodesRefit, NODES_
 pub use sah::{sah_cost, SahParams};
 pub use sbvh::build_sbvh;
 pub use sweep::build_sweep_sah;
+pub use traverse::TraversalSteps;
 pub use tuning::{
     tune_schedule, tune_updater, tunes_by_default, BuildSchedule, DeviceTrials, SchedulePins,
     ScheduleTrial, ScheduleTrials, TunedSchedule, TuningOptions, TuningSpace,

@@ -1,6 +1,7 @@
 //! CPU traversal of a tree: closest hit and any hit with the watertight triangle test, the twin of
-//! `shaders/include/bvh_traverse.wgsl` (same robust box test, nearer child first). Used by tests
-//! and tools that trace a few rays without a GPU; the renderer traces on the GPU.
+//! `shaders/include/bvh_traverse.wgsl` (same robust box test, nearer child first), and the steps
+//! it takes (`TraversalSteps`, which the GPU traversals count too). Used by tests and tools that
+//! trace a few rays without a GPU; the renderer traces on the GPU.
 
 use glam::Vec3;
 
@@ -8,6 +9,22 @@ use super::Bvh;
 use crate::geometry::{Hit, Ray, RayTriangleTest};
 use crate::gpu::constants::BOX_EXIT_SLACK;
 use crate::scene::Triangle;
+
+/// The work of traversals: the internal nodes whose children's boxes they tested (a binary node's
+/// two, a wide node's eight) and the triangles they tested. Exact counts of the same rays through
+/// two trees compare the trees' trace cost on any device, however noisy its timing.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TraversalSteps {
+    pub nodes: u64,
+    pub triangles: u64,
+}
+
+impl std::ops::AddAssign for TraversalSteps {
+    fn add_assign(&mut self, other: Self) {
+        self.nodes += other.nodes;
+        self.triangles += other.triangles;
+    }
+}
 
 /// The ray as the box test needs it (see `BoxRay` in bvh_traverse.wgsl).
 struct BoxRay {
@@ -44,26 +61,32 @@ impl BoxRay {
 impl Bvh {
     /// The closest hit of `ray` with `ray.t_min < t < ray.t_max` (`Hit::MISS` when none).
     pub fn closest_hit(&self, triangles: &[Triangle], ray: &Ray) -> Hit {
+        self.traverse(triangles, ray, false).0
+    }
+
+    /// `closest_hit` and the steps its traversal took (those of the GPU's binary traversal).
+    pub fn closest_hit_steps(&self, triangles: &[Triangle], ray: &Ray) -> (Hit, TraversalSteps) {
         self.traverse(triangles, ray, false)
     }
 
     /// Some hit of `ray` in its interval, not necessarily the closest (shadow rays).
     pub fn any_hit(&self, triangles: &[Triangle], ray: &Ray) -> Hit {
-        self.traverse(triangles, ray, true)
+        self.traverse(triangles, ray, true).0
     }
 
-    fn traverse(&self, triangles: &[Triangle], ray: &Ray, any_hit: bool) -> Hit {
+    fn traverse(&self, triangles: &[Triangle], ray: &Ray, any_hit: bool) -> (Hit, TraversalSteps) {
         let mut best = Hit {
             t: ray.t_max,
             ..Hit::miss()
         };
+        let mut steps = TraversalSteps::default();
         if self.nodes.is_empty() {
-            return Hit::miss();
+            return (Hit::miss(), steps);
         }
         let test = RayTriangleTest::for_ray(ray);
         let boxes = BoxRay::new(ray);
         if boxes.entry(self, 0, ray.t_min, best.t).is_none() {
-            return Hit::miss();
+            return (Hit::miss(), steps);
         }
         // Far children with their entry distances; a popped one is skipped when it starts beyond
         // the closest hit so far (by more than the rounding slack).
@@ -79,6 +102,7 @@ impl Bvh {
         }) {
             let node = self.nodes[index as usize];
             if node.is_leaf() {
+                steps.triangles += u64::from(node.prim_count());
                 let first = node.left_or_first as usize;
                 for &tri in &self.prim_indices[first..first + node.prim_count() as usize] {
                     let [v0, v1, v2] = triangles[tri as usize].vertices();
@@ -91,6 +115,7 @@ impl Bvh {
                 }
                 continue;
             }
+            steps.nodes += 1;
             let (l, r) = node.children();
             let hits = [l, r].map(|c| boxes.entry(self, c, ray.t_min, best.t).map(|e| (c, e)));
             match hits {
@@ -103,10 +128,7 @@ impl Bvh {
                 [None, None] => {}
             }
         }
-        if best.is_hit() {
-            best
-        } else {
-            Hit::miss()
-        }
+        let hit = if best.is_hit() { best } else { Hit::miss() };
+        (hit, steps)
     }
 }

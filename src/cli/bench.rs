@@ -422,6 +422,19 @@ struct BenchRecord {
     trace_wall_ms: f64,
     mrays_per_s: Option<f64>,
     mrays_per_s_spread: Option<Spread>,
+    /// The traversal steps of the same rays, counted in one more trace: exact on any device
+    /// (however noisy its timing), so two trees or layouts compare by them.
+    steps: Option<StepsRecord>,
+}
+
+/// Traversal steps in the JSON: internal nodes whose children's boxes were tested (a binary
+/// node's two, a wide node's eight) and triangles tested, in all and per ray.
+#[derive(Serialize)]
+struct StepsRecord {
+    nodes: u64,
+    triangles: u64,
+    nodes_per_ray: f64,
+    triangles_per_ray: f64,
 }
 
 /// A schedule tuning in the JSON: the schedule kept (labelled by what differs from the defaults),
@@ -632,6 +645,23 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
         let trace_ms: Option<Vec<f64>> = traces.iter().map(|t| t.trace_ms).collect();
         let mrays: Option<Vec<f64>> = traces.iter().map(TraceStats::mrays_per_s).collect();
         let stats = median_trace(traces);
+        // The same rays once more, their traversal steps counted (a pipeline of its own, untimed).
+        tracer.set_count_steps(true);
+        let counted = trace(&mut tracer)?;
+        if counted.rays != stats.rays {
+            log::warn!(
+                "{label}: the counting trace traced {} rays, the timed ones {}",
+                counted.rays,
+                stats.rays
+            );
+        }
+        let per_ray = |count: u64| count as f64 / counted.rays.max(1) as f64;
+        let steps = counted.steps.map(|s| StepsRecord {
+            nodes: s.nodes,
+            triangles: s.triangles,
+            nodes_per_ray: per_ray(s.nodes),
+            triangles_per_ray: per_ray(s.triangles),
+        });
         let dispatch_ms = args.profile_dispatches.then(|| {
             report
                 .stages
@@ -726,6 +756,7 @@ pub fn run(gpu: &GpuContext, args: &BenchArgs) -> Result<()> {
             trace_wall_ms: stats.wall_ms,
             mrays_per_s: stats.mrays_per_s(),
             mrays_per_s_spread: mrays.and_then(|v| Spread::of(&v)),
+            steps,
         };
         println!(
             "{}",

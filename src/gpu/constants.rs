@@ -72,6 +72,12 @@ pub const MAX_GPU_LEAF_SIZE: u32 = 32;
 /// Widening of a box's exit distance in the traversal's box test (Ize 2013): rounding never culls
 /// a box that the ray touches (see `box_entry` in bvh_traverse.wgsl).
 pub const BOX_EXIT_SLACK: f32 = 1.000_001_9;
+/// Dispatches one path trace records at most. Each counts its rays and stack overflows in a pair
+/// of the tracer's counters and, where the trace counts its traversal steps, their two 64-bit
+/// counts in four words after all the pairs (from `TRACE_STEPS_AT`).
+pub const MAX_TRACE_DISPATCHES: u32 = 64;
+/// The word of the tracer's counters where the traversal steps of the first dispatch start.
+pub const TRACE_STEPS_AT: u32 = 2 * MAX_TRACE_DISPATCHES;
 /// Bits per radix-sort digit.
 pub const RADIX_BITS: u32 = 4;
 /// Elements per workgroup of the prefix scan.
@@ -108,6 +114,7 @@ pub fn wgsl() -> String {
         u32_const("RADIX_BITS", RADIX_BITS),
         u32_const("SCAN_BLOCK", SCAN_BLOCK),
         u32_const("REDUCE_TILE", REDUCE_TILE),
+        u32_const("TRACE_STEPS_AT", TRACE_STEPS_AT),
         f32_const("F32_MAX", f32::MAX),
         // A working leaf without a slot in its output leaf (a repeated triangle; `leaf_slots` of
         // nodes_mark.wgsl and nodes_compact.wgsl).

@@ -7,9 +7,13 @@ use std::sync::OnceLock;
 use glam::Vec3;
 
 use super::image_tonemap::{TonemapParams, IMAGE_TONEMAP};
-use super::paths_trace::{TraceParams, PATHS_TRACE, PATHS_TRACE_WIDE, POINT_LIGHTS_OVERRIDE};
+use super::paths_trace::{
+    TraceParams, COUNT_STEPS_OVERRIDE, PATHS_TRACE, PATHS_TRACE_WIDE, POINT_LIGHTS_OVERRIDE,
+};
 use crate::bvh::wide::Layout;
+use crate::bvh::TraversalSteps;
 use crate::device::{Geometry, Tree};
+use crate::gpu::constants::{MAX_TRACE_DISPATCHES, TRACE_STEPS_AT};
 use crate::gpu::{
     flag_override, read_buffer, storage_buffer_zeroed, GpuContext, GpuTimer, Grid, Kernel,
     ParamSlab, Recorder,
@@ -50,6 +54,8 @@ pub struct TraceStats {
     /// Wall-clock time including submission and waiting.
     pub wall_ms: f64,
     pub samples: u32,
+    /// The traversal steps of all its rays, where the tracer counted them (`set_count_steps`).
+    pub steps: Option<TraversalSteps>,
 }
 
 impl TraceStats {
@@ -68,17 +74,31 @@ const MAX_WORKGROUP_RAYS: u64 = 1 << 25;
 /// Pixels (invocations) per workgroup of the trace kernels: 8 x 8 (`WORKGROUP_INVOCATIONS` in
 /// path_integrator.wgsl).
 const WORKGROUP_PIXELS: u64 = 64;
-/// Dispatches one trace records at most (each counts its rays in its own pair of counters).
-const MAX_DISPATCHES: u32 = 64;
 
 /// The dispatches of one recorded trace: their count and the samples they add.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct RecordedTrace {
     pub dispatches: u32,
     pub samples: u32,
+    /// Whether its dispatches counted their traversal steps.
+    pub counts_steps: bool,
 }
 
 impl RecordedTrace {
+    /// The traversal steps of its dispatches from the tracer's counters read back whole (the
+    /// words from `TRACE_STEPS_AT` on hold each dispatch's two 64-bit counts).
+    pub fn steps(&self, counters: &[u32]) -> TraversalSteps {
+        let count = |low: usize| u64::from(counters[low]) | u64::from(counters[low + 1]) << 32;
+        (0..self.dispatches as usize).fold(TraversalSteps::default(), |mut sum, d| {
+            let at = TRACE_STEPS_AT as usize + 4 * d;
+            sum += TraversalSteps {
+                nodes: count(at),
+                triangles: count(at + 2),
+            };
+            sum
+        })
+    }
+
     /// (rays, stack overflows) from the tracer's counters as read back after the submission.
     pub fn totals(&self, counters: &[u32]) -> (u64, u64) {
         counters
@@ -92,13 +112,16 @@ impl RecordedTrace {
 
 pub struct PathTracer {
     settings: RenderSettings,
-    /// The trace kernels per layout (binary, wide) and whether the scene has point lights,
-    /// compiled when first used (`trace_kernel`).
-    trace: [[OnceLock<Kernel<TraceParams>>; 2]; 2],
+    /// The trace kernels per layout (binary, wide), whether the scene has point lights and
+    /// whether they count steps, compiled when first used (`trace_kernel`).
+    trace: [[[OnceLock<Kernel<TraceParams>>; 2]; 2]; 2],
+    /// Whether traces count their traversal steps (`set_count_steps`).
+    count_steps: bool,
     tonemap: Kernel<TonemapParams>,
     accum: wgpu::Buffer,
     pixels: wgpu::Buffer,
-    /// Per dispatch of the last recorded trace: [rays, stack overflows].
+    /// Per dispatch of the last recorded trace: [rays, stack overflows]; from `TRACE_STEPS_AT`,
+    /// per dispatch its traversal steps where counted (nodes, triangles: 64 bits each).
     counters: wgpu::Buffer,
     samples_done: u32,
     /// Parameters of what this tracer records and submits itself (`trace`, `read_image`).
@@ -124,17 +147,28 @@ impl PathTracer {
         Ok(Self {
             settings,
             trace: Default::default(),
+            count_steps: false,
             tonemap: Kernel::new(ctx, &IMAGE_TONEMAP),
             accum: storage_buffer_zeroed(ctx, "accumulation", pixel_count * 16)?,
             pixels: storage_buffer_zeroed(ctx, "pixels", pixel_count * 4)?,
-            counters: storage_buffer_zeroed(ctx, "trace counters", u64::from(MAX_DISPATCHES) * 8)?,
+            counters: storage_buffer_zeroed(ctx, "trace counters", Self::COUNTER_WORDS * 4)?,
             samples_done: 0,
             params: ParamSlab::new(ctx),
         })
     }
 
+    /// Words of the counters: a pair per dispatch, then four per dispatch for the steps.
+    const COUNTER_WORDS: u64 = TRACE_STEPS_AT as u64 + 4 * MAX_TRACE_DISPATCHES as u64;
+
     pub fn settings(&self) -> RenderSettings {
         self.settings
+    }
+
+    /// Whether the traces recorded from now on count their traversal steps (`TraceStats::steps`;
+    /// a pipeline of their own, which adds its counts with a few atomics per pixel: for
+    /// measurements, not for timed traces).
+    pub fn set_count_steps(&mut self, count: bool) {
+        self.count_steps = count;
     }
 
     /// Samples per pixel accumulated since the last reset.
@@ -155,8 +189,16 @@ impl PathTracer {
             Layout::Binary => (&PATHS_TRACE, &self.trace[0]),
             Layout::Wide => (&PATHS_TRACE_WIDE, &self.trace[1]),
         };
-        by_layout[usize::from(lights)].get_or_init(|| {
-            Kernel::with_overrides(ctx, decl, &[flag_override(POINT_LIGHTS_OVERRIDE, lights)])
+        let count = self.count_steps;
+        by_layout[usize::from(lights)][usize::from(count)].get_or_init(|| {
+            Kernel::with_overrides(
+                ctx,
+                decl,
+                &[
+                    flag_override(POINT_LIGHTS_OVERRIDE, lights),
+                    flag_override(COUNT_STEPS_OVERRIDE, count),
+                ],
+            )
         })
     }
 
@@ -193,12 +235,12 @@ impl PathTracer {
             .min((MAX_WORKGROUP_RAYS - 1) / workgroup_rays_per_sample)
             .clamp(1, u64::from(samples.max(1))) as u32;
         let dispatches = samples.div_ceil(per_dispatch);
-        if dispatches > MAX_DISPATCHES {
+        if dispatches > MAX_TRACE_DISPATCHES {
             return Err(Error::InvalidArgument(format!(
                 "{samples} samples of {}x{} pixels in one trace: at most {} per call",
                 s.width,
                 s.height,
-                per_dispatch * MAX_DISPATCHES
+                per_dispatch * MAX_TRACE_DISPATCHES
             )));
         }
         // What the leaves' references are tested through: the binary tree's indices into the
@@ -246,6 +288,7 @@ impl PathTracer {
         Ok(RecordedTrace {
             dispatches,
             samples,
+            counts_steps: self.count_steps,
         })
     }
 
@@ -286,8 +329,12 @@ impl PathTracer {
         trace_ms: Option<f64>,
         wall_ms: f64,
     ) -> Result<TraceStats> {
-        let counters: Vec<u32> =
-            read_buffer(ctx, &self.counters, 2 * recorded.dispatches as usize)?;
+        let words = if recorded.counts_steps {
+            Self::COUNTER_WORDS as usize
+        } else {
+            2 * recorded.dispatches as usize
+        };
+        let counters: Vec<u32> = read_buffer(ctx, &self.counters, words)?;
         let (rays, overflows) = recorded.totals(&counters);
         if overflows > 0 {
             return Err(Error::Gpu(format!(
@@ -299,6 +346,7 @@ impl PathTracer {
             trace_ms,
             wall_ms,
             samples: recorded.samples,
+            steps: recorded.counts_steps.then(|| recorded.steps(&counters)),
         })
     }
 

@@ -34,6 +34,12 @@ pub struct TraceParams {
 /// 60 vector registers, `paths_trace_wide` 96 → 84; README, "Kernel statistics").
 pub const POINT_LIGHTS_OVERRIDE: &str = "POINT_LIGHTS";
 
+/// The pipeline-overridable constant that makes the trace and query kernels write out their
+/// traversals' steps (`override COUNT_STEPS` in ray_box.wgsl; `TraversalSteps`): 1 in the
+/// pipelines of a counting trace or query, 0 (nothing counted, the same code as without it)
+/// everywhere else.
+pub const COUNT_STEPS_OVERRIDE: &str = "COUNT_STEPS";
+
 kernel!(pub PATHS_TRACE: TraceParams = "paths_trace"::"main", [8, 8, 1],
     [Read, Read, Read, Read, ReadWrite, ReadWrite, Read]);
 

@@ -1,9 +1,12 @@
 //! Batched ray queries on the GPU (kernels `rays_intersect`, `rays_intersect_wide`): the closest
-//! hit of every ray, or any hit in its interval, through a tree in the binary or the wide layout.
+//! hit of every ray, or any hit in its interval, through a tree in the binary or the wide layout;
+//! on request with each ray's traversal steps.
 
 use bytemuck::{Pod, Zeroable};
 
+use super::paths_trace::COUNT_STEPS_OVERRIDE;
 use crate::bvh::wide::Layout;
+use crate::bvh::TraversalSteps;
 use crate::device::{Geometry, Tree};
 use crate::geometry::{Hit, Ray};
 use crate::gpu::{
@@ -41,7 +44,7 @@ pub fn closest_hits(
     tree: &Tree,
     rays: &[Ray],
 ) -> Result<Vec<Hit>> {
-    query(ctx, geometry, tree, rays, false, Layout::Binary)
+    Ok(query(ctx, geometry, tree, rays, false, Layout::Binary, false)?.0)
 }
 
 /// Some hit of every ray in its interval (the first the traversal finds, as for shadow rays).
@@ -52,7 +55,7 @@ pub fn any_hits(
     tree: &Tree,
     rays: &[Ray],
 ) -> Result<Vec<Hit>> {
-    query(ctx, geometry, tree, rays, true, Layout::Binary)
+    Ok(query(ctx, geometry, tree, rays, true, Layout::Binary, false)?.0)
 }
 
 /// [`closest_hits`] through the tree's wide layout (`tree.wide`, from a conversion).
@@ -62,7 +65,7 @@ pub fn closest_hits_wide(
     tree: &Tree,
     rays: &[Ray],
 ) -> Result<Vec<Hit>> {
-    query(ctx, geometry, tree, rays, false, Layout::Wide)
+    Ok(query(ctx, geometry, tree, rays, false, Layout::Wide, false)?.0)
 }
 
 /// [`any_hits`] through the tree's wide layout (`tree.wide`, from a conversion).
@@ -72,9 +75,23 @@ pub fn any_hits_wide(
     tree: &Tree,
     rays: &[Ray],
 ) -> Result<Vec<Hit>> {
-    query(ctx, geometry, tree, rays, true, Layout::Wide)
+    Ok(query(ctx, geometry, tree, rays, true, Layout::Wide, false)?.0)
 }
 
+/// [`closest_hits`] through `layout` with each ray's traversal steps: the internal nodes whose
+/// children's boxes it tested and the triangles it tested (binary: as the CPU twin
+/// `Bvh::closest_hit_steps` counts them).
+pub fn closest_hits_with_steps(
+    ctx: &GpuContext,
+    geometry: &Geometry,
+    tree: &Tree,
+    rays: &[Ray],
+    layout: Layout,
+) -> Result<(Vec<Hit>, Vec<TraversalSteps>)> {
+    query(ctx, geometry, tree, rays, false, layout, true)
+}
+
+/// The hits of `rays`, and their steps when `count_steps` (else none).
 fn query(
     ctx: &GpuContext,
     geometry: &Geometry,
@@ -82,9 +99,10 @@ fn query(
     rays: &[Ray],
     any_hit: bool,
     layout: Layout,
-) -> Result<Vec<Hit>> {
+    count_steps: bool,
+) -> Result<(Vec<Hit>, Vec<TraversalSteps>)> {
     if rays.is_empty() {
-        return Ok(Vec::new());
+        return Ok((Vec::new(), Vec::new()));
     }
     let ray_count = u32::try_from(rays.len())
         .map_err(|_| Error::InvalidArgument(format!("{} rays in one batch", rays.len())))?;
@@ -100,7 +118,10 @@ fn query(
     }
     // What the leaves' references are tested through: the binary tree's indices into the
     // triangles, the wide tree's copies of its references' triangles.
-    let overrides = [flag_override(ANY_HIT_OVERRIDE, any_hit)];
+    let overrides = [
+        flag_override(ANY_HIT_OVERRIDE, any_hit),
+        flag_override(COUNT_STEPS_OVERRIDE, count_steps),
+    ];
     let (kernel, nodes, leaf_data) = match layout {
         Layout::Binary => (
             Kernel::with_overrides(ctx, &RAYS_INTERSECT, &overrides),
@@ -127,7 +148,9 @@ fn query(
     };
     let ray_buffer = storage_buffer(ctx, "rays", rays)?;
     let hits = storage_buffer_zeroed(ctx, "hits", std::mem::size_of_val(rays) as u64 / 2)?;
-    let counters = storage_buffer_zeroed(ctx, "query counters", 4)?;
+    // The overflow count, then two words of steps per ray where counted.
+    let counter_words = if count_steps { 1 + 2 * rays.len() } else { 1 };
+    let counters = storage_buffer_zeroed(ctx, "query counters", 4 * counter_words as u64)?;
     let mut slab = ParamSlab::new(ctx);
     let mut rec = Recorder::new(ctx, &mut slab, None);
     rec.pass("rays_intersect").dispatch(
@@ -144,12 +167,19 @@ fn query(
         ],
     );
     rec.submit();
-    let overflows: Vec<u32> = read_buffer(ctx, &counters, 1)?;
-    if overflows[0] > 0 {
+    let words: Vec<u32> = read_buffer(ctx, &counters, counter_words)?;
+    if words[0] > 0 {
         return Err(Error::Gpu(format!(
             "{} rays overflowed the traversal stack (tree too deep)",
-            overflows[0]
+            words[0]
         )));
     }
-    read_buffer(ctx, &hits, rays.len())
+    let steps = words[1..]
+        .chunks_exact(2)
+        .map(|w| TraversalSteps {
+            nodes: u64::from(w[0]),
+            triangles: u64::from(w[1]),
+        })
+        .collect();
+    Ok((read_buffer(ctx, &hits, rays.len())?, steps))
 }
