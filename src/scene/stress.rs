@@ -58,6 +58,29 @@ impl Random {
     }
 }
 
+/// A scene lit by a white sky alone, of diffuse materials with these albedos, seen from `eye`
+/// towards `target` (y up) with a vertical field of view in degrees.
+fn sky_lit(
+    name: String,
+    triangles: Vec<Triangle>,
+    albedos: &[Vec3],
+    (eye, target, fov_y_degrees): (Vec3, Vec3, f32),
+) -> Scene {
+    Scene {
+        name,
+        triangles,
+        materials: albedos.iter().map(|&a| Material::diffuse(a)).collect(),
+        camera: Camera {
+            eye,
+            target,
+            up: Vec3::Y,
+            fov_y_degrees,
+        },
+        sky: Vec3::ONE,
+        lights: Vec::new(),
+    }
+}
+
 /// Triangles appended with one material.
 fn push_all(out: &mut Vec<Triangle>, triangles: &[[Vec3; 3]], material: u32) {
     out.extend(
@@ -106,24 +129,17 @@ pub fn stacked_duplicates(copies: u32) -> Scene {
         push_all(&mut triangles, &moved, copy % 3);
     }
     floor(&mut triangles, 6.0, -1.1, 3);
-    Scene {
-        name: format!("stacked-{copies}"),
+    sky_lit(
+        format!("stacked-{copies}"),
         triangles,
-        materials: vec![
-            Material::diffuse(Vec3::new(0.8, 0.35, 0.25)),
-            Material::diffuse(Vec3::new(0.3, 0.55, 0.8)),
-            Material::diffuse(Vec3::new(0.85, 0.8, 0.5)),
-            Material::diffuse(Vec3::splat(0.6)),
+        &[
+            Vec3::new(0.8, 0.35, 0.25),
+            Vec3::new(0.3, 0.55, 0.8),
+            Vec3::new(0.85, 0.8, 0.5),
+            Vec3::splat(0.6),
         ],
-        camera: Camera {
-            eye: Vec3::new(0.6, 0.9, 3.4),
-            target: Vec3::new(0.0, -0.1, 0.0),
-            up: Vec3::Y,
-            fov_y_degrees: 45.0,
-        },
-        sky: Vec3::ONE,
-        lights: Vec::new(),
-    }
+        (Vec3::new(0.6, 0.9, 3.4), Vec3::new(0.0, -0.1, 0.0), 45.0),
+    )
 }
 
 /// Triangles per grass blade: two tapering quads and a tip.
@@ -178,24 +194,21 @@ pub fn grass_blades(blades: u32) -> Scene {
         );
     }
     floor(&mut triangles, GRASS_HALF_SIZE + 1.0, 0.0, 3);
-    Scene {
-        name: format!("grass-{blades}"),
+    sky_lit(
+        format!("grass-{blades}"),
         triangles,
-        materials: vec![
-            Material::diffuse(Vec3::new(0.25, 0.55, 0.15)),
-            Material::diffuse(Vec3::new(0.35, 0.6, 0.2)),
-            Material::diffuse(Vec3::new(0.45, 0.55, 0.2)),
-            Material::diffuse(Vec3::new(0.35, 0.27, 0.18)),
+        &[
+            Vec3::new(0.25, 0.55, 0.15),
+            Vec3::new(0.35, 0.6, 0.2),
+            Vec3::new(0.45, 0.55, 0.2),
+            Vec3::new(0.35, 0.27, 0.18),
         ],
-        camera: Camera {
-            eye: Vec3::new(0.0, 0.8, GRASS_HALF_SIZE + 0.8),
-            target: Vec3::new(0.0, 0.0, 0.5),
-            up: Vec3::Y,
-            fov_y_degrees: 50.0,
-        },
-        sky: Vec3::ONE,
-        lights: Vec::new(),
-    }
+        (
+            Vec3::new(0.0, 0.8, GRASS_HALF_SIZE + 0.8),
+            Vec3::new(0.0, 0.0, 0.5),
+            50.0,
+        ),
+    )
 }
 
 /// Segments per strand of `hairball` (two triangles each).
@@ -247,22 +260,12 @@ pub fn hairball(strands: u32) -> Scene {
             push_all(&mut triangles, &[[l0, r0, r1], [l0, r1, l1]], strand % 2);
         }
     }
-    Scene {
-        name: format!("hairball-{strands}"),
+    sky_lit(
+        format!("hairball-{strands}"),
         triangles,
-        materials: vec![
-            Material::diffuse(Vec3::new(0.7, 0.55, 0.35)),
-            Material::diffuse(Vec3::new(0.6, 0.45, 0.3)),
-        ],
-        camera: Camera {
-            eye: Vec3::new(0.0, 0.4, 3.2),
-            target: Vec3::ZERO,
-            up: Vec3::Y,
-            fov_y_degrees: 42.0,
-        },
-        sky: Vec3::ONE,
-        lights: Vec::new(),
-    }
+        &[Vec3::new(0.7, 0.55, 0.35), Vec3::new(0.6, 0.45, 0.3)],
+        (Vec3::new(0.0, 0.4, 3.2), Vec3::ZERO, 42.0),
+    )
 }
 
 /// The teapot's profile, (distance from its axis, height) in teapot units (1.04 tall): from the
@@ -439,24 +442,17 @@ pub fn teapot_in_stadium(detail: u32) -> Scene {
         let (w2, w3) = (ring(STAND_TIERS, next, 0.0), ring(STAND_TIERS, step, 0.0));
         push_all(&mut triangles, &[[w0, w1, w2], [w0, w2, w3]], stands);
     }
-    Scene {
-        name: format!("stadium-{detail}"),
+    sky_lit(
+        format!("stadium-{detail}"),
         triangles,
-        materials: vec![
-            Material::diffuse(Vec3::new(0.85, 0.85, 0.8)),
-            Material::diffuse(Vec3::new(0.25, 0.5, 0.2)),
-            Material::diffuse(Vec3::splat(0.55)),
-            Material::diffuse(Vec3::new(0.5, 0.25, 0.2)),
+        &[
+            Vec3::new(0.85, 0.85, 0.8),
+            Vec3::new(0.25, 0.5, 0.2),
+            Vec3::splat(0.55),
+            Vec3::new(0.5, 0.25, 0.2),
         ],
-        camera: Camera {
-            eye: Vec3::new(0.12, 0.3, 0.85),
-            target: Vec3::new(0.0, 0.13, 0.0),
-            up: Vec3::Y,
-            fov_y_degrees: 45.0,
-        },
-        sky: Vec3::ONE,
-        lights: Vec::new(),
-    }
+        (Vec3::new(0.12, 0.3, 0.85), Vec3::new(0.0, 0.13, 0.0), 45.0),
+    )
 }
 
 #[cfg(test)]
