@@ -2,7 +2,8 @@
 //! tonemapping (`path_tracer`, kernels `paths_trace` and `image_tonemap`), batched closest-hit and
 //! any-hit queries (`rays_intersect`), in the binary or the wide layout, either counting its
 //! traversals' steps on request (`bvh::TraversalSteps`), PNG files (`png`), and the CPU
-//! brute-force oracle they are tested against (`brute_force`). Geometry and trees come from `device`.
+//! brute-force oracle they are tested against (`brute_force`). Geometry and trees come from
+//! `device`.
 
 mod brute_force;
 mod image_tonemap;
