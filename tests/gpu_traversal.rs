@@ -89,13 +89,8 @@ fn traversal_steps_equal_the_cpu_twin() {
             .map(|r| bvh.closest_hit_steps(&scene.triangles, r).1)
             .collect();
         let differing = steps.iter().zip(&twin).filter(|(g, c)| g != c).count();
-        let total = |s: &[TraversalSteps]| {
-            s.iter().fold(TraversalSteps::default(), |mut sum, &x| {
-                sum += x;
-                sum
-            })
-        };
-        let (gpu_total, cpu_total) = (total(&steps), total(&twin));
+        let gpu_total: TraversalSteps = steps.iter().copied().sum();
+        let cpu_total: TraversalSteps = twin.iter().copied().sum();
         println!(
             "{}: {} rays, {gpu_total:?} on the GPU, {cpu_total:?} on the CPU, {differing} rays differ",
             scene.name,

@@ -2,7 +2,8 @@
 // rays_intersect_wide.wgsl: wide BVH), which declare the bindings and include their traversal
 // (`traverse`) before this file: one invocation per ray, its closest hit (or any hit) written per
 // ray, and with COUNT_STEPS its traversal's steps (internal nodes, triangles) after the
-// overflow count. Used by tests (against CPU brute force) and by anyone who needs batched ray queries.
+// overflow count. Used by tests (against CPU brute force) and by anyone who needs batched ray
+// queries.
 
 struct QueryParams {
     ray_count: u32,

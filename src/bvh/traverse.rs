@@ -26,6 +26,15 @@ impl std::ops::AddAssign for TraversalSteps {
     }
 }
 
+impl std::iter::Sum for TraversalSteps {
+    fn sum<I: Iterator<Item = Self>>(steps: I) -> Self {
+        steps.fold(Self::default(), |mut sum, s| {
+            sum += s;
+            sum
+        })
+    }
+}
+
 /// The ray as the box test needs it (see `BoxRay` in bvh_traverse.wgsl).
 struct BoxRay {
     origin: Vec3,

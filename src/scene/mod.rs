@@ -1,7 +1,8 @@
 //! Scenes: triangles with material ids, materials (diffuse albedo + emission), point lights, a
 //! camera and a sky.
 //! Sources: OBJ files (`obj`), procedural built-ins (`procedural`; the stress scenes of the trace
-//! issue's table, `stress`), looked up by name or path in `registry`. Every scene passes through `sanitize` (the documented bad-geometry policy).
+//! issue's table, `stress`), looked up by name or path in `registry`. Every scene passes through
+//! `sanitize` (the documented bad-geometry policy).
 
 mod bart;
 mod camera;

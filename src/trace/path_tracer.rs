@@ -89,14 +89,15 @@ impl RecordedTrace {
     /// words from `TRACE_STEPS_AT` on hold each dispatch's two 64-bit counts).
     pub fn steps(&self, counters: &[u32]) -> TraversalSteps {
         let count = |low: usize| u64::from(counters[low]) | u64::from(counters[low + 1]) << 32;
-        (0..self.dispatches as usize).fold(TraversalSteps::default(), |mut sum, d| {
-            let at = TRACE_STEPS_AT as usize + 4 * d;
-            sum += TraversalSteps {
-                nodes: count(at),
-                triangles: count(at + 2),
-            };
-            sum
-        })
+        (0..self.dispatches as usize)
+            .map(|d| {
+                let at = TRACE_STEPS_AT as usize + 4 * d;
+                TraversalSteps {
+                    nodes: count(at),
+                    triangles: count(at + 2),
+                }
+            })
+            .sum()
     }
 
     /// (rays, stack overflows) from the tracer's counters as read back after the submission.
